@@ -1,0 +1,21 @@
+//! # vpl-bench
+//!
+//! Measuring the toolkit: image comparisons with standard errors, the
+//! validation of the path tracer against Mitsuba 3, throughput figures, and
+//! the `vpl` command-line tool.
+//!
+//! ```
+//! use vpl_bench::compare::{compare, z_critical};
+//! use vpl_core::{glam::Vec3, Image};
+//!
+//! let a = Image { width: 1, height: 1, data: vec![Vec3::splat(1.0)] };
+//! let se = Image { width: 1, height: 1, data: vec![Vec3::splat(0.1)] };
+//! let c = compare(&a, &se, &a, &se, 0.01);
+//! assert_eq!(c.pass_rate, 1.0);
+//! assert!((z_critical(0.01) - 2.576).abs() < 1e-3);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod compare;
+pub mod validation;

@@ -1,0 +1,160 @@
+//! Built-in procedural scenes, each with its default animated sequence.
+//!
+//! | name | stands in for | exercises |
+//! | --- | --- | --- |
+//! | `cornell` | Mitsuba 3.9.1's Cornell box, exactly | the ruler against an independent renderer |
+//! | `maze` | the SMC paper's Maze (13 lights) | heavy occlusion, many small lights, a corridor walk |
+//! | `office` | Soda Hall (14 lights) | a long corridor with rooms behind doors |
+//! | `courtyard` | Epic Citadel (one sun) | sunlit roofs invisible from the street |
+//! | `atrium` | Crytek Sponza (one moving light) | an arcaded court, a light moving through it |
+//! | `corner` | Georgiev & Slusallek's scene | a light around the corner behind the camera |
+//! | `glass` | Dammertz et al.'s box scenes | glass, a mirror, glossy spheres κ = 0 … 0.9 |
+
+mod atrium;
+mod corner;
+mod cornell;
+mod courtyard;
+mod glass;
+mod maze;
+mod office;
+
+use crate::camera::FovAxis;
+use crate::error::{CoreError, Result};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::scene_file::{CameraKeySpec, CameraSpec, LightSpec, SequenceSpec};
+use glam::Vec3;
+
+/// Names of the built-in scenes.
+pub const NAMES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
+
+/// A built-in scene before it becomes a [`crate::Scene`].
+#[derive(Clone, Debug)]
+pub struct Builtin {
+    /// Its name.
+    pub name: &'static str,
+    /// Geometry.
+    pub mesh: Mesh,
+    /// Materials (emissive ones make area lights).
+    pub materials: Vec<Material>,
+    /// Point, spot and directional lights.
+    pub lights: Vec<LightSpec>,
+    /// The camera at time 0.
+    pub camera: CameraSpec,
+    /// The default animation.
+    pub sequence: SequenceSpec,
+    /// Whether diffuse surfaces reflect on both sides.
+    pub two_sided: bool,
+}
+
+/// Builds the built-in scene `name`.
+pub fn build(name: &str) -> Result<Builtin> {
+    Ok(match name {
+        "cornell" => cornell::build(),
+        "maze" => maze::build(),
+        "office" => office::build(),
+        "courtyard" => courtyard::build(),
+        "atrium" => atrium::build(),
+        "corner" => corner::build(),
+        "glass" => glass::build(),
+        _ => return Err(CoreError::UnknownBuiltin(name.to_string())),
+    })
+}
+
+/// A pinhole camera description.
+fn camera(origin: [f32; 3], target: [f32; 3], fov: f32, resolution: [u32; 2]) -> CameraSpec {
+    CameraSpec { origin, target, up: [0.0, 1.0, 0.0], fov, fov_axis: FovAxis::Smaller, resolution, lens_radius: 0.0, focus_distance: 1.0 }
+}
+
+/// A camera path through `points` (eye positions), looking `ahead` keys forward,
+/// spread evenly over `duration` seconds at 30 fps.
+fn walk(points: &[Vec3], duration: f32, look_height: f32) -> SequenceSpec {
+    let n = points.len();
+    let camera = (0..n)
+        .map(|i| {
+            let t = duration * i as f32 / (n - 1).max(1) as f32;
+            let here = points[i];
+            let next = if i + 1 < n { points[i + 1] } else { here + (here - points[i.saturating_sub(1)]) };
+            let dir = (next - here).normalize_or_zero();
+            let target = here + dir * 4.0 + Vec3::Y * (look_height - here.y);
+            CameraKeySpec { t, origin: here.into(), target: target.into() }
+        })
+        .collect();
+    SequenceSpec { fps: 30.0, duration, camera, lights: Vec::new() }
+}
+
+/// A wall in the plane `x = x` from `z0` to `z1` (z0 < z1), height `h` from y = 0,
+/// with door openings `(z_center, width, height)`.
+fn wall_x(mesh: &mut Mesh, x: f32, z0: f32, z1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
+    let mut z = z0;
+    let mut ds: Vec<_> = doors.to_vec();
+    ds.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let q = |mesh: &mut Mesh, za: f32, zb: f32, ya: f32, yb: f32| {
+        if zb > za && yb > ya {
+            mesh.push_quad(Vec3::new(x, ya, za), Vec3::new(x, ya, zb), Vec3::new(x, yb, zb), Vec3::new(x, yb, za), m);
+        }
+    };
+    for (zc, w, dh) in ds {
+        let (a, b) = (zc - 0.5 * w, zc + 0.5 * w);
+        q(mesh, z, a, 0.0, h);
+        q(mesh, a, b, dh, h);
+        z = b;
+    }
+    q(mesh, z, z1, 0.0, h);
+}
+
+/// A wall in the plane `z = z` from `x0` to `x1`, like [`wall_x`].
+fn wall_z(mesh: &mut Mesh, z: f32, x0: f32, x1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
+    let mut x = x0;
+    let mut ds: Vec<_> = doors.to_vec();
+    ds.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let q = |mesh: &mut Mesh, xa: f32, xb: f32, ya: f32, yb: f32| {
+        if xb > xa && yb > ya {
+            mesh.push_quad(Vec3::new(xa, ya, z), Vec3::new(xa, yb, z), Vec3::new(xb, yb, z), Vec3::new(xb, ya, z), m);
+        }
+    };
+    for (xc, w, dh) in ds {
+        let (a, b) = (xc - 0.5 * w, xc + 0.5 * w);
+        q(mesh, x, a, 0.0, h);
+        q(mesh, a, b, dh, h);
+        x = b;
+    }
+    q(mesh, x, x1, 0.0, h);
+}
+
+/// A horizontal rectangle at height `y` facing up (`up = true`) or down.
+fn horizontal(mesh: &mut Mesh, x0: f32, x1: f32, z0: f32, z1: f32, y: f32, up: bool, m: u32) {
+    let (a, b, c, d) = (Vec3::new(x0, y, z0), Vec3::new(x0, y, z1), Vec3::new(x1, y, z1), Vec3::new(x1, y, z0));
+    if up { mesh.push_quad(a, b, c, d, m) } else { mesh.push_quad(a, d, c, b, m) }
+}
+
+/// A square emissive panel of side `s` centred at (x, y, z), facing down.
+fn ceiling_lamp(mesh: &mut Mesh, x: f32, y: f32, z: f32, s: f32, m: u32) {
+    horizontal(mesh, x - 0.5 * s, x + 0.5 * s, z - 0.5 * s, z + 0.5 * s, y, false, m);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setup::SceneSetup;
+
+    #[test]
+    fn every_builtin_builds_renders_setup_and_has_a_20_to_30_s_sequence() {
+        for name in NAMES {
+            let s = SceneSetup::builtin(name).unwrap();
+            let seq = s.sequence.as_ref().unwrap();
+            assert!((20.0..=30.0).contains(&seq.duration), "{name}: {}", seq.duration);
+            assert!(!s.scene.lights.is_empty());
+            let last = seq.frame_count() - 1;
+            s.frame(last).unwrap();
+            // Export and load again: same scene description.
+            let toml = s.to_toml();
+            let f = crate::scene_file::SceneFile::parse(&toml, std::path::Path::new("x.toml")).unwrap();
+            let again = SceneSetup::from_file(f, std::path::Path::new("")).unwrap();
+            assert_eq!(again.scene.materials, s.scene.materials, "{name}");
+            assert_eq!(again.scene.lights, s.scene.lights, "{name}");
+            assert_eq!(again.camera, s.camera, "{name}");
+            assert_eq!(again.sequence, s.sequence, "{name}");
+        }
+    }
+}

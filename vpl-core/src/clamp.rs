@@ -1,0 +1,40 @@
+//! The geometry-term clamp shared by VPL shading and the clamped path tracer.
+//!
+//! A VPL at y lights a point x with the geometry term
+//! G(x, y) = max(0, cos θ_x) · max(0, cos θ_y) / |x − y|², which is unbounded
+//! as y approaches x. Both the VPL shaders and the path tracer's clamped mode
+//! (Hedman et al. 2017, §5.4) replace G by min(G, G_max): the contribution is
+//! scaled by [`GeometryClamp::factor`]. One rule, one place.
+
+/// Clamp of the geometry term at `g_max` (units 1/m²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GeometryClamp {
+    /// Largest geometry term passed through.
+    pub g_max: f32,
+}
+
+impl GeometryClamp {
+    /// A clamp at `g_max`.
+    pub fn new(g_max: f32) -> Self {
+        Self { g_max }
+    }
+
+    /// The clamped geometry term min(G, G_max).
+    #[inline]
+    pub fn clamp(&self, g: f32) -> f32 {
+        g.min(self.g_max)
+    }
+
+    /// The factor min(1, G_max / G) that turns a contribution computed with G
+    /// into one computed with min(G, G_max).
+    #[inline]
+    pub fn factor(&self, g: f32) -> f32 {
+        if g > self.g_max { self.g_max / g } else { 1.0 }
+    }
+}
+
+/// The geometry term between two oriented points (cosines clamped at zero).
+#[inline]
+pub fn geometry_term(cos_x: f32, cos_y: f32, dist2: f32) -> f32 {
+    cos_x.max(0.0) * cos_y.max(0.0) / dist2
+}

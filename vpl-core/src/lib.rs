@@ -1,0 +1,58 @@
+//! # vpl-core
+//!
+//! The ground every crate of the VPL toolkit stands on: rays and frames,
+//! seeded random streams, the scene (one triangle mesh, materials, lights,
+//! a CWBVH from `obvhs`), cameras, images with EXR and PNG I/O, the OBJ and
+//! TOML loaders, the built-in scenes and their animations, and the shared
+//! traits.
+//!
+//! ```
+//! use vpl_core::{SceneSetup, Purpose, stream};
+//!
+//! let setup = SceneSetup::load("cornell").unwrap();
+//! let ray = setup.camera.ray(128.0, 128.0, (0.5, 0.5));
+//! let hit = setup.scene.intersect(&ray).expect("the tall box");
+//! assert!(hit.point.p.z < 1.0 && hit.t > 2.8);
+//! let mut rng = stream(0, 0, Purpose::PIXEL, 42);
+//! assert!(rng.next_f32() < 1.0);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod builtin;
+pub mod bvh;
+pub mod camera;
+pub mod clamp;
+pub mod distribution;
+pub mod error;
+pub mod image;
+pub mod light;
+pub mod material;
+pub mod mesh;
+pub mod obj;
+pub mod ray;
+pub mod rng;
+pub mod sampling;
+pub mod scene;
+pub mod scene_file;
+pub mod sequence;
+pub mod setup;
+pub mod surface;
+pub mod traits;
+
+pub use camera::{Camera, FovAxis};
+pub use clamp::GeometryClamp;
+pub use error::{CoreError, Result};
+pub use glam;
+pub use image::Image;
+pub use light::{Light, LightSample};
+pub use material::{Layered, Material};
+pub use mesh::{Mesh, TriangleDesc};
+pub use ray::{LocalFrame, Ray};
+pub use rng::{stream, Purpose, RngStream};
+pub use scene::Scene;
+pub use scene_file::SceneFile;
+pub use sequence::Sequence;
+pub use setup::SceneSetup;
+pub use surface::{Hit, SurfacePoint};
+pub use traits::RadiosityEstimator;

@@ -1,0 +1,73 @@
+//! Materials: diffuse albedo and emission now, κ-layered parameters for the
+//! progressive renderer (Dammertz et al. 2010, §4).
+
+use glam::Vec3;
+
+/// A surface material.
+///
+/// The VPL methods and the path tracer read `albedo` (Lambertian reflectance
+/// ρ) and `emission` (radiance Le emitted along the face normal, one-sided).
+/// `layered` carries the κ-layered model of the progressive renderer; until
+/// that renderer exists, a layered material is rendered by its diffuse part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name (from the MTL file or the built-in scene).
+    pub name: String,
+    /// Diffuse albedo ρ, linear RGB in [0, 1].
+    pub albedo: Vec3,
+    /// Emitted radiance Le (W / m² / sr), linear RGB.
+    pub emission: Vec3,
+    /// Glossy / specular / transmissive layer parameters, if any.
+    pub layered: Option<Layered>,
+}
+
+/// Parameters of the κ-layered Blinn–Phong model (Dammertz et al. 2010, §4):
+/// κ = 0 is Lambertian, κ = 1 a mirror, the Phong exponent is 1024κ + 1, and
+/// a layer is treated as diffuse when κ < 0.2.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layered {
+    /// Glossiness κ ∈ [0, 1].
+    pub kappa: f32,
+    /// Specular reflectance of the layer (linear RGB).
+    pub specular: Vec3,
+    /// Fraction of light transmitted (0 opaque, 1 clear glass).
+    pub transmission: f32,
+    /// Index of refraction at the reference wavelength (589 nm).
+    pub ior: f32,
+    /// Abbe number for dispersion (0 = no dispersion).
+    pub abbe: f32,
+}
+
+impl Layered {
+    /// Phong exponent 1024κ + 1 (Dammertz et al. 2010, §4).
+    pub fn exponent(&self) -> f32 {
+        1024.0 * self.kappa + 1.0
+    }
+
+    /// Whether the layer counts as diffuse (κ < 0.2).
+    pub fn is_diffuse(&self) -> bool {
+        self.kappa < 0.2
+    }
+}
+
+impl Material {
+    /// A Lambertian material.
+    pub fn diffuse(name: impl Into<String>, albedo: Vec3) -> Self {
+        Self { name: name.into(), albedo, emission: Vec3::ZERO, layered: None }
+    }
+
+    /// A Lambertian material that also emits `emission`.
+    pub fn emissive(name: impl Into<String>, albedo: Vec3, emission: Vec3) -> Self {
+        Self { name: name.into(), albedo, emission, layered: None }
+    }
+
+    /// The material used where a file names none: grey 0.5.
+    pub fn default_material() -> Self {
+        Self::diffuse("default", Vec3::splat(0.5))
+    }
+
+    /// True when the material emits light.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}

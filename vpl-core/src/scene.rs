@@ -1,0 +1,371 @@
+//! The scene: one triangle mesh with materials and lights, its BVH, and light selection.
+
+use crate::bvh::Bvh;
+use crate::distribution::Distribution1D;
+use crate::error::{CoreError, Result};
+use crate::light::{Light, LightSample};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::ray::Ray;
+use crate::sampling::uniform_triangle;
+use crate::surface::{Hit, SurfacePoint};
+use glam::Vec3;
+use std::sync::Arc;
+
+/// Per-triangle data kept for shading and light sampling.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleData {
+    /// First vertex.
+    pub p0: Vec3,
+    /// Edge p1 − p0.
+    pub e1: Vec3,
+    /// Edge p2 − p0.
+    pub e2: Vec3,
+    /// Unit geometric normal, `normalize(e1 × e2)`.
+    pub ng: Vec3,
+    /// Area.
+    pub area: f32,
+    /// Material index.
+    pub material: u32,
+    /// Index into the scene's shading-normal table (`u32::MAX` = flat).
+    pub normals: u32,
+}
+
+/// Geometry that does not change during a sequence: triangles, shading normals, BVH.
+#[derive(Debug)]
+pub struct Geometry {
+    /// Triangles after validation (degenerate ones removed).
+    pub triangles: Vec<TriangleData>,
+    /// Per-vertex shading normals of smooth triangles, three per entry.
+    pub shading_normals: Vec<[Vec3; 3]>,
+    /// The BVH over `triangles`.
+    pub bvh: Bvh,
+    /// Scene bounds (min, max).
+    pub bounds: (Vec3, Vec3),
+    /// Ray offset used to leave a surface, scaled with the scene's extent.
+    pub epsilon: f32,
+    /// Triangles dropped for zero area.
+    pub degenerate: usize,
+}
+
+/// A renderable scene.
+///
+/// Geometry is shared (`Arc`) so that a frame of an animation can change the
+/// lights ([`Scene::with_lights`]) without rebuilding the BVH.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name (built-in name or file stem).
+    pub name: String,
+    /// Shared geometry and BVH.
+    pub geometry: Arc<Geometry>,
+    /// Materials, indexed by `TriangleData::material`.
+    pub materials: Vec<Material>,
+    /// All lights: area lights (one per emissive triangle) first, then the others.
+    pub lights: Vec<Light>,
+    /// `tri_light[t]` is the light index of emissive triangle `t`, or `u32::MAX`.
+    pub tri_light: Vec<u32>,
+    /// Light selection proportional to power.
+    pub light_distribution: Distribution1D,
+    /// Whether diffuse surfaces reflect on both sides (`false`: back faces are black, as in Mitsuba).
+    pub two_sided: bool,
+    /// Warnings gathered while building (degenerate triangles, …).
+    pub warnings: Vec<String>,
+}
+
+/// Statistics printed with a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneStats {
+    /// Triangles kept.
+    pub triangles: usize,
+    /// Triangles dropped for zero area.
+    pub degenerate: usize,
+    /// Lights of every kind.
+    pub lights: usize,
+}
+
+impl Scene {
+    /// Builds a scene from a mesh, its materials and the non-area lights.
+    /// Emissive materials make every triangle that uses them an area light.
+    ///
+    /// Errors: a non-finite vertex, no triangle of nonzero area, no light,
+    /// a material index out of range.
+    pub fn new(name: impl Into<String>, mesh: &Mesh, materials: Vec<Material>, extra_lights: Vec<Light>, two_sided: bool) -> Result<Scene> {
+        let name = name.into();
+        for (i, p) in mesh.positions.iter().enumerate() {
+            if !p.is_finite() {
+                return Err(CoreError::NonFinite { what: name.clone(), index: i, value: format!("{} {} {}", p.x, p.y, p.z) });
+            }
+        }
+        let mut warnings = Vec::new();
+        let mut triangles = Vec::with_capacity(mesh.triangles.len());
+        let mut shading_normals = Vec::new();
+        let mut degenerate = 0usize;
+        for (ti, t) in mesh.triangles.iter().enumerate() {
+            let get = |i: u32| -> Result<Vec3> {
+                mesh.positions.get(i as usize).copied().ok_or_else(|| CoreError::Invalid(format!("triangle {ti} of {name} refers to missing vertex {i}")))
+            };
+            let (p0, p1, p2) = (get(t.v[0])?, get(t.v[1])?, get(t.v[2])?);
+            if t.material as usize >= materials.len() {
+                return Err(CoreError::Invalid(format!("triangle {ti} of {name} uses missing material {}", t.material)));
+            }
+            let e1 = p1 - p0;
+            let e2 = p2 - p0;
+            let c = e1.cross(e2);
+            let area = 0.5 * c.length();
+            if !(area > 0.0) || !c.normalize_or_zero().is_normalized() {
+                degenerate += 1;
+                continue;
+            }
+            let ng = c.normalize();
+            let mut normals = u32::MAX;
+            if let Some(n) = t.n {
+                let fetch = |i: u32| mesh.normals.get(i as usize).copied().filter(|v| v.is_finite() && v.length_squared() > 0.0);
+                if let (Some(a), Some(b), Some(c)) = (fetch(n[0]), fetch(n[1]), fetch(n[2])) {
+                    normals = shading_normals.len() as u32;
+                    shading_normals.push([a.normalize(), b.normalize(), c.normalize()]);
+                }
+            }
+            triangles.push(TriangleData { p0, e1, e2, ng, area, material: t.material, normals });
+        }
+        if degenerate > 0 {
+            warnings.push(format!("{name}: skipped {degenerate} zero-area triangle(s)"));
+        }
+        if triangles.is_empty() {
+            return Err(CoreError::EmptyScene(name));
+        }
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &triangles {
+            for p in [t.p0, t.p0 + t.e1, t.p0 + t.e2] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        let extent = lo.abs().max(hi.abs()).max_element().max(1.0);
+        let epsilon = 1e-4 * extent;
+        let bvh = Bvh::build(&triangles);
+        let geometry = Arc::new(Geometry { triangles, shading_normals, bvh, bounds: (lo, hi), epsilon, degenerate });
+        let mut scene = Scene {
+            name,
+            geometry,
+            materials,
+            lights: Vec::new(),
+            tri_light: Vec::new(),
+            light_distribution: Distribution1D::default(),
+            two_sided,
+            warnings,
+        };
+        scene.set_lights(extra_lights)?;
+        Ok(scene)
+    }
+
+    /// A copy of this scene with other non-area lights (an animated frame); shares the geometry.
+    pub fn with_lights(&self, extra_lights: Vec<Light>) -> Result<Scene> {
+        let mut s = self.clone();
+        s.set_lights(extra_lights)?;
+        Ok(s)
+    }
+
+    fn set_lights(&mut self, extra_lights: Vec<Light>) -> Result<()> {
+        let g = &self.geometry;
+        let mut lights = Vec::new();
+        let mut tri_light = vec![u32::MAX; g.triangles.len()];
+        for (i, t) in g.triangles.iter().enumerate() {
+            let m = &self.materials[t.material as usize];
+            if m.is_emissive() {
+                tri_light[i] = lights.len() as u32;
+                lights.push(Light::Area { triangle: i as u32, radiance: m.emission });
+            }
+        }
+        lights.extend(extra_lights);
+        let radius = self.radius();
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|l| match l {
+                Light::Area { triangle, .. } => l.power(g.triangles[*triangle as usize].area, radius),
+                _ => l.power(0.0, radius),
+            })
+            .collect();
+        let dist = Distribution1D::new(&powers).ok_or_else(|| CoreError::NoLights(self.name.clone()))?;
+        self.lights = lights;
+        self.tri_light = tri_light;
+        self.light_distribution = dist;
+        Ok(())
+    }
+
+    /// The lights that are not emissive triangles (what [`Scene::with_lights`] replaces).
+    pub fn extra_lights(&self) -> Vec<Light> {
+        self.lights.iter().filter(|l| l.is_delta()).cloned().collect()
+    }
+
+    /// Radius of the bounding sphere of the scene's bounds.
+    pub fn radius(&self) -> f32 {
+        let (lo, hi) = self.geometry.bounds;
+        0.5 * (hi - lo).length()
+    }
+
+    /// Counts for reports.
+    pub fn stats(&self) -> SceneStats {
+        SceneStats { triangles: self.geometry.triangles.len(), degenerate: self.geometry.degenerate, lights: self.lights.len() }
+    }
+
+    /// The material of a surface point.
+    #[inline]
+    pub fn material(&self, p: &SurfacePoint) -> &Material {
+        &self.materials[p.material as usize]
+    }
+
+    /// The surface point at barycentrics (b1, b2) of triangle `tri`.
+    #[inline]
+    pub fn surface_point(&self, tri: u32, b1: f32, b2: f32) -> SurfacePoint {
+        let t = &self.geometry.triangles[tri as usize];
+        let p = t.p0 + t.e1 * b1 + t.e2 * b2;
+        let n = if t.normals == u32::MAX {
+            t.ng
+        } else {
+            let ns = &self.geometry.shading_normals[t.normals as usize];
+            let n = (ns[0] * (1.0 - b1 - b2) + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
+            if n == Vec3::ZERO { t.ng } else if n.dot(t.ng) < 0.0 { -n } else { n }
+        };
+        SurfacePoint { p, ng: t.ng, n, triangle: tri, material: t.material }
+    }
+
+    /// Closest intersection of `ray` with the scene.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (tri, t) = self.geometry.bvh.closest(ray)?;
+        let td = &self.geometry.triangles[tri as usize];
+        let p = ray.at(t);
+        if td.normals == u32::MAX {
+            return Some(Hit { t, point: SurfacePoint { p, ng: td.ng, n: td.ng, triangle: tri, material: td.material } });
+        }
+        let (b1, b2) = barycentrics(td, p);
+        let mut point = self.surface_point(tri, b1, b2);
+        point.p = p;
+        Some(Hit { t, point })
+    }
+
+    /// Whether anything blocks `ray` before `ray.t_max` (early-exit shadow test).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.geometry.bvh.occluded(ray)
+    }
+
+    /// Whether the segment from `a` to `b` is unblocked; both ends are
+    /// surface points already offset by the caller, or free points.
+    #[inline]
+    pub fn visible(&self, a: Vec3, b: Vec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        if len <= 0.0 {
+            return true;
+        }
+        !self.occluded(&Ray::segment(a, d / len, len * (1.0 - 1e-4) - self.geometry.epsilon))
+    }
+
+    /// Offset that leaves a surface without self-intersection.
+    #[inline]
+    pub fn epsilon(&self) -> f32 {
+        self.geometry.epsilon
+    }
+
+    /// Chooses a light with probability proportional to power and samples it
+    /// from receiver `x`. Returns the sample and the selection probability.
+    /// `None` when the sample carries no light toward `x`.
+    #[inline]
+    pub fn sample_light(&self, x: Vec3, u_select: f32, u: (f32, f32)) -> Option<(LightSample, f32)> {
+        let (i, p_select) = self.light_distribution.sample(u_select);
+        let s = self.sample_light_index(i, x, u)?;
+        Some((s, p_select))
+    }
+
+    /// Samples light `i` from receiver `x`.
+    #[inline]
+    pub fn sample_light_index(&self, i: usize, x: Vec3, u: (f32, f32)) -> Option<LightSample> {
+        match &self.lights[i] {
+            Light::Area { triangle, radiance } => {
+                let t = &self.geometry.triangles[*triangle as usize];
+                let (b1, b2) = uniform_triangle(u.0, u.1);
+                let y = t.p0 + t.e1 * b1 + t.e2 * b2;
+                let d = y - x;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let cos_l = -wi.dot(t.ng);
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                Some(LightSample { wi, dist, li: *radiance, pdf: dist2 / (cos_l * t.area), delta: false })
+            }
+            Light::Point { position, intensity } => {
+                let d = *position - x;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                Some(LightSample { wi: d / dist, dist, li: *intensity / dist2, pdf: 1.0, delta: true })
+            }
+            Light::Spot { position, direction, intensity, cos_falloff_start, cos_total } => {
+                let d = *position - x;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let f = Light::spot_falloff(-wi.dot(*direction), *cos_falloff_start, *cos_total);
+                if f <= 0.0 {
+                    return None;
+                }
+                Some(LightSample { wi, dist, li: *intensity * (f / dist2), pdf: 1.0, delta: true })
+            }
+            Light::Directional { direction, irradiance } => {
+                Some(LightSample { wi: -*direction, dist: f32::INFINITY, li: *irradiance, pdf: 1.0, delta: true })
+            }
+        }
+    }
+
+    /// Solid-angle density with which [`Scene::sample_light`] would pick the
+    /// point `y` on emissive triangle `tri`, seen from `x` (for MIS).
+    #[inline]
+    pub fn light_pdf(&self, x: Vec3, y: &SurfacePoint) -> f32 {
+        let li = self.tri_light[y.triangle as usize];
+        if li == u32::MAX {
+            return 0.0;
+        }
+        let t = &self.geometry.triangles[y.triangle as usize];
+        let d = y.p - x;
+        let dist2 = d.length_squared();
+        let cos_l = -(d / dist2.sqrt()).dot(t.ng);
+        if cos_l <= 0.0 {
+            return 0.0;
+        }
+        self.light_distribution.pmf(li as usize) * dist2 / (cos_l * t.area)
+    }
+
+    /// Radiance emitted by `y` toward direction `wo` (one-sided, along the geometric normal).
+    #[inline]
+    pub fn emitted(&self, y: &SurfacePoint, wo: Vec3) -> Vec3 {
+        let m = &self.materials[y.material as usize];
+        if wo.dot(y.ng) > 0.0 { m.emission } else { Vec3::ZERO }
+    }
+}
+
+/// Barycentrics (b1, b2) of point `p` in triangle `t` (weights of p1 and p2).
+#[inline]
+fn barycentrics(t: &TriangleData, p: Vec3) -> (f32, f32) {
+    let v2 = p - t.p0;
+    let d00 = t.e1.dot(t.e1);
+    let d01 = t.e1.dot(t.e2);
+    let d11 = t.e2.dot(t.e2);
+    let d20 = v2.dot(t.e1);
+    let d21 = v2.dot(t.e2);
+    let denom = d00 * d11 - d01 * d01;
+    let b1 = (d11 * d20 - d01 * d21) / denom;
+    let b2 = (d00 * d21 - d01 * d20) / denom;
+    (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0 - b1.clamp(0.0, 1.0)))
+}

@@ -1,0 +1,268 @@
+//! Scene files: an OBJ or a built-in, plus camera, lights, material overrides
+//! and an animation, in TOML (schema in DESIGN.md). Unknown keys are errors.
+
+use crate::camera::FovAxis;
+use crate::error::{CoreError, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The whole file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Where the triangles come from.
+    pub geometry: GeometrySpec,
+    /// The camera (default: the built-in's, or one framing the OBJ's bounds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraSpec>,
+    /// Point, spot and directional lights (emissive materials are area lights anyway).
+    /// For a built-in, present lights replace the built-in's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights: Option<Vec<LightSpec>>,
+    /// Material overrides by name.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<MaterialSpec>,
+    /// Optional animation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceSpec>,
+}
+
+/// `[geometry]`: exactly one of `obj` and `builtin`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GeometrySpec {
+    /// OBJ path, relative to the TOML file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obj: Option<String>,
+    /// Name of a built-in scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub builtin: Option<String>,
+    /// The model's up axis, "y" (default) or "z" (rotated to +Y up).
+    #[serde(default = "default_up")]
+    pub up: String,
+    /// Uniform scale applied to the OBJ.
+    #[serde(default = "one")]
+    pub scale: f32,
+    /// Diffuse surfaces reflect on both sides (default); `false`: back faces are black.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub two_sided: Option<bool>,
+}
+
+/// `[camera]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Eye position.
+    pub origin: [f32; 3],
+    /// Point looked at.
+    pub target: [f32; 3],
+    /// Up hint; image right = normalize(target − origin) × up.
+    #[serde(default = "default_up_vec")]
+    pub up: [f32; 3],
+    /// Full field of view in degrees.
+    pub fov: f32,
+    /// "x", "y" or "smaller" (default).
+    #[serde(default = "default_fov_axis")]
+    pub fov_axis: FovAxis,
+    /// Default image size.
+    #[serde(default = "default_resolution")]
+    pub resolution: [u32; 2],
+    /// Thin-lens aperture radius (0 = pinhole).
+    #[serde(default)]
+    pub lens_radius: f32,
+    /// Focus distance.
+    #[serde(default = "one")]
+    pub focus_distance: f32,
+}
+
+/// `[[lights]]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightSpec {
+    /// An isotropic point light.
+    Point {
+        /// Position.
+        position: [f32; 3],
+        /// Intensity in W/sr.
+        intensity: [f32; 3],
+    },
+    /// A spot light.
+    Spot {
+        /// Position.
+        position: [f32; 3],
+        /// Axis.
+        direction: [f32; 3],
+        /// Intensity on the axis in W/sr.
+        intensity: [f32; 3],
+        /// Half-angle of the cone in degrees.
+        #[serde(default = "default_spot_angle")]
+        angle: f32,
+        /// Half-angle where the falloff begins (default: 0.8 × angle).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        falloff_start: Option<f32>,
+    },
+    /// The sun.
+    Directional {
+        /// Direction light travels.
+        direction: [f32; 3],
+        /// Irradiance (W/m²) on a surface facing the sun.
+        irradiance: [f32; 3],
+    },
+}
+
+/// `[[materials]]`: overrides of a named material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Material name (from the MTL or the built-in).
+    pub name: String,
+    /// Diffuse albedo.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<[f32; 3]>,
+    /// Emitted radiance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission: Option<[f32; 3]>,
+    /// Layer glossiness κ (progressive renderer).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f32>,
+    /// Specular reflectance of the layer.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular: Option<[f32; 3]>,
+    /// Transmitted fraction (glass).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<f32>,
+    /// Index of refraction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ior: Option<f32>,
+    /// Abbe number (dispersion; 0 = none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub abbe: Option<f32>,
+}
+
+/// `[sequence]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SequenceSpec {
+    /// Frames per second.
+    #[serde(default = "default_fps")]
+    pub fps: f32,
+    /// Length in seconds.
+    pub duration: f32,
+    /// Camera keys.
+    #[serde(default)]
+    pub camera: Vec<CameraKeySpec>,
+    /// Light keys.
+    #[serde(default)]
+    pub lights: Vec<LightKeySpec>,
+}
+
+/// A camera key.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraKeySpec {
+    /// Time (s).
+    pub t: f32,
+    /// Eye position.
+    pub origin: [f32; 3],
+    /// Point looked at.
+    pub target: [f32; 3],
+}
+
+/// A light key.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightKeySpec {
+    /// Index into `[[lights]]`.
+    pub light: usize,
+    /// Time (s).
+    pub t: f32,
+    /// New position.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// New direction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f32; 3]>,
+}
+
+fn default_up() -> String {
+    "y".into()
+}
+fn one() -> f32 {
+    1.0
+}
+fn default_up_vec() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov_axis() -> FovAxis {
+    FovAxis::Smaller
+}
+fn default_resolution() -> [u32; 2] {
+    [320, 240]
+}
+fn default_spot_angle() -> f32 {
+    30.0
+}
+fn default_fps() -> f32 {
+    30.0
+}
+
+impl SceneFile {
+    /// Parses TOML text; `path` only names the file in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
+        let f: SceneFile = toml::from_str(text).map_err(|e| CoreError::SceneFile {
+            path: path.into(),
+            reason: e.message().replace('\n', " ").trim().to_string(),
+        })?;
+        match (&f.geometry.obj, &f.geometry.builtin) {
+            (Some(_), Some(_)) | (None, None) => {
+                return Err(CoreError::SceneFile { path: path.into(), reason: "[geometry] needs exactly one of `obj` and `builtin`".into() });
+            }
+            _ => {}
+        }
+        if f.geometry.up != "y" && f.geometry.up != "z" {
+            return Err(CoreError::SceneFile { path: path.into(), reason: format!("geometry.up must be \"y\" or \"z\", got \"{}\"", f.geometry.up) });
+        }
+        if !(f.geometry.scale.is_finite() && f.geometry.scale > 0.0) {
+            return Err(CoreError::SceneFile { path: path.into(), reason: format!("geometry.scale must be positive, got {}", f.geometry.scale) });
+        }
+        if let Some(s) = &f.sequence {
+            if !(s.fps > 0.0 && s.duration > 0.0) {
+                return Err(CoreError::SceneFile { path: path.into(), reason: "sequence.fps and sequence.duration must be positive".into() });
+            }
+        }
+        Ok(f)
+    }
+
+    /// Reads and parses a file.
+    pub fn read(path: &Path) -> Result<SceneFile> {
+        let text = std::fs::read_to_string(path).map_err(|e| CoreError::Read { path: path.into(), source: e })?;
+        Self::parse(&text, path)
+    }
+
+    /// The TOML text of this description.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("scene descriptions always serialise")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_keys_are_errors_that_name_the_key() {
+        let p = Path::new("x.toml");
+        let ok = "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\n";
+        assert!(SceneFile::parse(ok, p).is_ok());
+        for (bad, key) in [
+            ("[geometry]\nbuiltin = \"cornell\"\ncolour = 1\n", "colour"),
+            ("[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\nradius = 2\n", "radius"),
+            ("[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin=[0,0,1]\ntarget=[0,0,0]\nfov=40\nzoom=2\n", "zoom"),
+            ("[geometry]\nbuiltin = \"cornell\"\n[extra]\n", "extra"),
+        ] {
+            let e = SceneFile::parse(bad, p).unwrap_err().to_string();
+            assert!(e.contains(key), "{e}");
+        }
+        assert!(SceneFile::parse("[geometry]\n", p).is_err());
+    }
+}

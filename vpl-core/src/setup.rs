@@ -1,0 +1,293 @@
+//! A loaded scene with its camera and animation: from a built-in name, a
+//! scene file (TOML) or a bare OBJ.
+
+use crate::builtin;
+use crate::camera::{Camera, FovAxis};
+use crate::error::{CoreError, Result};
+use crate::light::Light;
+use crate::material::{Layered, Material};
+use crate::obj::load_obj;
+use crate::scene::Scene;
+use crate::scene_file::{CameraSpec, GeometrySpec, LightSpec, SceneFile, SequenceSpec};
+use crate::sequence::{CameraKey, LightKey, Sequence};
+use glam::Vec3;
+use std::path::Path;
+
+/// Everything needed to render a scene or its animation.
+#[derive(Clone, Debug)]
+pub struct SceneSetup {
+    /// The scene at time 0 (lights as the description gives them).
+    pub scene: Scene,
+    /// The camera at time 0.
+    pub camera: Camera,
+    /// The animation, if any.
+    pub sequence: Option<Sequence>,
+    /// What loading noticed (missing MTL, skipped triangles, …).
+    pub warnings: Vec<String>,
+    /// The description this setup was made from (`vpl export-scene` writes it).
+    pub description: SceneFile,
+}
+
+impl SceneSetup {
+    /// Loads `spec`: a built-in name, a `.toml` scene file or an `.obj` file.
+    pub fn load(spec: &str) -> Result<SceneSetup> {
+        let path = Path::new(spec);
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("toml") => {
+                let file = SceneFile::read(path)?;
+                Self::from_file(file, path.parent().unwrap_or(Path::new(".")))
+            }
+            Some("obj") => {
+                let file = SceneFile {
+                    geometry: GeometrySpec { obj: Some(spec.to_string()), builtin: None, up: "y".into(), scale: 1.0, two_sided: None },
+                    camera: None,
+                    lights: None,
+                    materials: Vec::new(),
+                    sequence: None,
+                };
+                Self::from_file(file, Path::new(""))
+            }
+            _ if builtin::NAMES.contains(&spec) => Self::builtin(spec),
+            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml or .obj"))),
+            _ => Err(CoreError::UnknownBuiltin(spec.to_string())),
+        }
+    }
+
+    /// A built-in scene by name.
+    pub fn builtin(name: &str) -> Result<SceneSetup> {
+        let b = builtin::build(name)?;
+        let file = b.description();
+        Self::from_file(file, Path::new(""))
+    }
+
+    /// Builds from a parsed description; OBJ paths are relative to `base`.
+    pub fn from_file(file: SceneFile, base: &Path) -> Result<SceneSetup> {
+        let mut warnings = Vec::new();
+        let (name, mesh, mut materials, defaults, two_sided_default) = if let Some(b) = &file.geometry.builtin {
+            let b = builtin::build(b)?;
+            let d = b.description();
+            (b.name.to_string(), b.mesh, b.materials, Some(d), b.two_sided)
+        } else {
+            let obj = file.geometry.obj.as_deref().unwrap_or_default();
+            let p = base.join(obj);
+            let data = load_obj(&p)?;
+            warnings.extend(data.warnings);
+            let mut mesh = data.mesh;
+            let s = file.geometry.scale;
+            let z_up = file.geometry.up == "z";
+            for v in mesh.positions.iter_mut() {
+                *v = if z_up { Vec3::new(v.x, v.z, -v.y) } else { *v } * s;
+            }
+            for n in mesh.normals.iter_mut() {
+                if z_up {
+                    *n = Vec3::new(n.x, n.z, -n.y);
+                }
+            }
+            let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+            (name, mesh, data.materials, None, true)
+        };
+        for m in &file.materials {
+            let target = materials
+                .iter_mut()
+                .find(|x| x.name == m.name)
+                .ok_or_else(|| CoreError::Invalid(format!("material override names unknown material '{}'", m.name)))?;
+            apply_override(target, m)?;
+        }
+        let lights_spec = file.lights.clone().or_else(|| defaults.as_ref().and_then(|d| d.lights.clone())).unwrap_or_default();
+        let lights = lights_spec.iter().map(light_from_spec).collect::<Result<Vec<_>>>()?;
+        let two_sided = file.geometry.two_sided.unwrap_or(two_sided_default);
+        let scene = Scene::new(name, &mesh, materials, lights, two_sided)?;
+        warnings.extend(scene.warnings.iter().cloned());
+        let camera_spec = file.camera.clone().or_else(|| defaults.as_ref().and_then(|d| d.camera.clone()));
+        let camera = match &camera_spec {
+            Some(c) => camera_from_spec(c)?,
+            None => framing_camera(&scene)?,
+        };
+        let seq_spec = file.sequence.clone().or_else(|| defaults.as_ref().and_then(|d| d.sequence.clone()));
+        let sequence = seq_spec.as_ref().map(|s| sequence_from_spec(s, lights_spec.len())).transpose()?;
+        let mut description = file;
+        description.camera = camera_spec.or_else(|| Some(camera_to_spec(&camera)));
+        description.lights = Some(lights_spec);
+        description.sequence = seq_spec;
+        Ok(SceneSetup { scene, camera, sequence, warnings, description })
+    }
+
+    /// Scene and camera at frame `frame` of the sequence (frame 0 without one).
+    pub fn frame(&self, frame: u32) -> Result<(Scene, Camera)> {
+        let Some(seq) = &self.sequence else {
+            return Ok((self.scene.clone(), self.camera.clone()));
+        };
+        let t = seq.time(frame);
+        let camera = match seq.camera_at(t) {
+            Some((o, g)) => self.camera.looking(o, g)?,
+            None => self.camera.clone(),
+        };
+        if seq.lights.is_empty() {
+            return Ok((self.scene.clone(), camera));
+        }
+        let mut lights = self.scene.extra_lights();
+        for (i, l) in lights.iter_mut().enumerate() {
+            let (p, d) = seq.light_at(i, t);
+            match l {
+                Light::Point { position, .. } => *position = p.unwrap_or(*position),
+                Light::Spot { position, direction, .. } => {
+                    *position = p.unwrap_or(*position);
+                    *direction = d.filter(|d| *d != Vec3::ZERO).unwrap_or(*direction);
+                }
+                Light::Directional { direction, .. } => *direction = d.filter(|d| *d != Vec3::ZERO).unwrap_or(*direction),
+                Light::Area { .. } => {}
+            }
+        }
+        Ok((self.scene.with_lights(lights)?, camera))
+    }
+
+    /// The scene description as TOML (what `vpl export-scene` prints).
+    pub fn to_toml(&self) -> String {
+        self.description.to_toml()
+    }
+}
+
+fn vec3(a: [f32; 3], what: &str) -> Result<Vec3> {
+    let v = Vec3::from(a);
+    if v.is_finite() { Ok(v) } else { Err(CoreError::Invalid(format!("{what} must be finite"))) }
+}
+
+fn nonneg(a: [f32; 3], what: &str) -> Result<Vec3> {
+    let v = vec3(a, what)?;
+    if v.min_element() >= 0.0 { Ok(v) } else { Err(CoreError::Invalid(format!("{what} must not be negative"))) }
+}
+
+fn apply_override(m: &mut Material, o: &crate::scene_file::MaterialSpec) -> Result<()> {
+    if let Some(a) = o.albedo {
+        m.albedo = nonneg(a, "material albedo")?.min(Vec3::ONE);
+    }
+    if let Some(e) = o.emission {
+        m.emission = nonneg(e, "material emission")?;
+    }
+    if o.kappa.is_some() || o.specular.is_some() || o.transmission.is_some() || o.ior.is_some() || o.abbe.is_some() {
+        let mut l = m.layered.clone().unwrap_or(Layered { kappa: 0.0, specular: Vec3::ZERO, transmission: 0.0, ior: 1.5, abbe: 0.0 });
+        if let Some(k) = o.kappa {
+            if !(0.0..=1.0).contains(&k) {
+                return Err(CoreError::Invalid(format!("kappa of '{}' must be in [0, 1], got {k}", o.name)));
+            }
+            l.kappa = k;
+        }
+        if let Some(s) = o.specular {
+            l.specular = nonneg(s, "material specular")?;
+        }
+        if let Some(t) = o.transmission {
+            l.transmission = t.clamp(0.0, 1.0);
+        }
+        if let Some(i) = o.ior {
+            l.ior = i;
+        }
+        if let Some(a) = o.abbe {
+            l.abbe = a;
+        }
+        m.layered = Some(l);
+    }
+    Ok(())
+}
+
+/// The [`Light`] a `[[lights]]` entry describes.
+pub fn light_from_spec(s: &LightSpec) -> Result<Light> {
+    Ok(match s {
+        LightSpec::Point { position, intensity } => Light::Point { position: vec3(*position, "light position")?, intensity: nonneg(*intensity, "light intensity")? },
+        LightSpec::Spot { position, direction, intensity, angle, falloff_start } => {
+            let d = vec3(*direction, "spot direction")?.normalize_or_zero();
+            if d == Vec3::ZERO || !(*angle > 0.0 && *angle <= 180.0) {
+                return Err(CoreError::Invalid("spot light needs a nonzero direction and an angle in (0, 180]".into()));
+            }
+            let start = falloff_start.unwrap_or(0.8 * angle).min(*angle);
+            Light::Spot {
+                position: vec3(*position, "light position")?,
+                direction: d,
+                intensity: nonneg(*intensity, "light intensity")?,
+                cos_falloff_start: start.to_radians().cos(),
+                cos_total: angle.to_radians().cos(),
+            }
+        }
+        LightSpec::Directional { direction, irradiance } => {
+            let d = vec3(*direction, "sun direction")?.normalize_or_zero();
+            if d == Vec3::ZERO {
+                return Err(CoreError::Invalid("sun direction must be nonzero".into()));
+            }
+            Light::Directional { direction: d, irradiance: nonneg(*irradiance, "sun irradiance")? }
+        }
+    })
+}
+
+/// The [`Camera`] a `[camera]` table describes.
+pub fn camera_from_spec(c: &CameraSpec) -> Result<Camera> {
+    Camera::thin_lens(
+        vec3(c.origin, "camera origin")?,
+        vec3(c.target, "camera target")?,
+        vec3(c.up, "camera up")?,
+        c.fov,
+        c.fov_axis,
+        (c.resolution[0], c.resolution[1]),
+        c.lens_radius,
+        c.focus_distance,
+    )
+}
+
+fn camera_to_spec(c: &Camera) -> CameraSpec {
+    CameraSpec {
+        origin: c.origin.into(),
+        target: c.target.into(),
+        up: c.up.into(),
+        fov: c.fov_deg,
+        fov_axis: c.fov_axis,
+        resolution: [c.resolution.0, c.resolution.1],
+        lens_radius: c.lens_radius,
+        focus_distance: c.focus_distance,
+    }
+}
+
+fn sequence_from_spec(s: &SequenceSpec, n_lights: usize) -> Result<Sequence> {
+    let mut camera: Vec<CameraKey> = s
+        .camera
+        .iter()
+        .map(|k| Ok(CameraKey { t: k.t, origin: vec3(k.origin, "camera key origin")?, target: vec3(k.target, "camera key target")? }))
+        .collect::<Result<_>>()?;
+    camera.sort_by(|a, b| a.t.total_cmp(&b.t));
+    let mut lights = Vec::new();
+    for k in &s.lights {
+        if k.light >= n_lights {
+            return Err(CoreError::Invalid(format!("sequence light key names light {} but there are {n_lights} [[lights]]", k.light)));
+        }
+        lights.push(LightKey {
+            light: k.light,
+            t: k.t,
+            position: k.position.map(|p| vec3(p, "light key position")).transpose()?,
+            direction: k.direction.map(|p| vec3(p, "light key direction")).transpose()?,
+        });
+    }
+    lights.sort_by(|a, b| a.t.total_cmp(&b.t));
+    Ok(Sequence { fps: s.fps, duration: s.duration, camera, lights })
+}
+
+/// A camera on the +Z side of the scene's bounds that frames its bounding sphere.
+fn framing_camera(scene: &Scene) -> Result<Camera> {
+    let (lo, hi) = scene.geometry.bounds;
+    let c = 0.5 * (lo + hi);
+    let r = scene.radius().max(1e-3);
+    let fov: f32 = 60.0;
+    let d = 1.1 * r / (0.5 * fov.to_radians()).sin();
+    Camera::new(c + Vec3::Z * d, c, Vec3::Y, fov, FovAxis::Smaller, (320, 240))
+}
+
+impl builtin::Builtin {
+    /// The description `vpl export-scene` writes for this built-in.
+    pub fn description(&self) -> SceneFile {
+        SceneFile {
+            geometry: GeometrySpec { obj: None, builtin: Some(self.name.to_string()), up: "y".into(), scale: 1.0, two_sided: Some(self.two_sided) },
+            camera: Some(self.camera.clone()),
+            lights: Some(self.lights.clone()),
+            materials: Vec::new(),
+            sequence: Some(self.sequence.clone()),
+        }
+    }
+}
+

@@ -1,0 +1,209 @@
+//! Rendering images and tracked pixels: rayon over tiles, one random stream
+//! per pixel, so the result is bit-identical for any thread count.
+
+use crate::integrator::PathTracer;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+use vpl_core::glam::Vec3;
+use vpl_core::{stream, Camera, Image, Purpose, Scene};
+
+/// Side of the square tiles work is split into.
+pub const TILE: u32 = 16;
+
+/// Sampling settings of a render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Samples (paths) per pixel, ≥ 1.
+    pub spp: u32,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Frame index (part of the stream key).
+    pub frame: u64,
+}
+
+/// A rendered image with its per-pixel standard error and counts.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// Mean radiance per pixel (box filter over the pixel).
+    pub image: Image,
+    /// Standard error of the per-pixel mean, per channel.
+    pub stderr: Image,
+    /// Paths traced (pixels × spp).
+    pub paths: u64,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// Errors of the renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Samples per pixel must be at least one.
+    #[error("spp must be at least 1")]
+    ZeroSpp,
+    /// A thread pool could not be built.
+    #[error("cannot start {0} threads: {1}")]
+    Threads(usize, String),
+}
+
+/// Renders `scene` through `camera` with `pt`. `progress(done, total)` is
+/// called with counts of finished pixels as tiles complete.
+pub fn render(scene: &Scene, camera: &Camera, pt: &PathTracer, s: RenderSettings, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<RenderOutput, RenderError> {
+    if s.spp == 0 {
+        return Err(RenderError::ZeroSpp);
+    }
+    let start = Instant::now();
+    let (w, h) = camera.resolution;
+    let tiles_x = w.div_ceil(TILE);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty))).collect();
+    let total = w as u64 * h as u64;
+    let done = AtomicU64::new(0);
+    let results: Vec<Vec<(Vec3, Vec3)>> = tiles
+        .par_iter()
+        .map(|&(tx, ty)| {
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    out.push(pixel(scene, camera, pt, x, y, s));
+                }
+            }
+            let d = done.fetch_add(out.len() as u64, Ordering::Relaxed) + out.len() as u64;
+            progress(d, total);
+            out
+        })
+        .collect();
+    let mut image = Image::new(w, h);
+    let mut stderr = Image::new(w, h);
+    for (&(tx, ty), px) in tiles.iter().zip(results) {
+        let (x0, y0) = (tx * TILE, ty * TILE);
+        let x1 = (x0 + TILE).min(w);
+        for (i, (m, e)) in px.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % (x1 - x0), y0 + i as u32 / (x1 - x0));
+            image.set(x, y, m);
+            stderr.set(x, y, e);
+        }
+    }
+    Ok(RenderOutput { image, stderr, paths: total * s.spp as u64, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// Mean and standard error of `s.spp` paths through pixel (x, y).
+#[inline]
+pub fn pixel(scene: &Scene, camera: &Camera, pt: &PathTracer, x: u32, y: u32, s: RenderSettings) -> (Vec3, Vec3) {
+    let index = y as u64 * camera.resolution.0 as u64 + x as u64;
+    let mut rng = stream(s.seed, s.frame, Purpose::PIXEL, index);
+    let mut acc = Accumulator::default();
+    for _ in 0..s.spp {
+        let (u, v) = rng.next_2d();
+        let lens = rng.next_2d();
+        let ray = camera.ray(x as f32 + u, y as f32 + v, lens);
+        acc.add(pt.li(scene, ray, &mut rng));
+    }
+    (acc.mean(), acc.stderr())
+}
+
+/// Running sums for a mean and its standard error (f64).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Accumulator {
+    n: u64,
+    sum: [f64; 3],
+    sum_sq: [f64; 3],
+}
+
+impl Accumulator {
+    /// Adds one sample.
+    #[inline]
+    pub fn add(&mut self, v: Vec3) {
+        self.n += 1;
+        for (c, x) in [v.x, v.y, v.z].into_iter().enumerate() {
+            let x = x as f64;
+            self.sum[c] += x;
+            self.sum_sq[c] += x * x;
+        }
+    }
+
+    /// Merges another accumulator.
+    pub fn merge(&mut self, o: &Accumulator) {
+        self.n += o.n;
+        for c in 0..3 {
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
+        }
+    }
+
+    /// Number of samples.
+    pub fn count(&self) -> u64 {
+        self.n
+    }
+
+    /// Sample mean.
+    pub fn mean(&self) -> Vec3 {
+        let n = self.n.max(1) as f64;
+        Vec3::new((self.sum[0] / n) as f32, (self.sum[1] / n) as f32, (self.sum[2] / n) as f32)
+    }
+
+    /// Standard error of the mean, sqrt(s² / n) with the unbiased sample variance s².
+    pub fn stderr(&self) -> Vec3 {
+        if self.n < 2 {
+            return Vec3::ZERO;
+        }
+        let n = self.n as f64;
+        let se = |c: usize| {
+            let m = self.sum[c] / n;
+            let var = ((self.sum_sq[c] - n * m * m) / (n - 1.0)).max(0.0);
+            (var / n).sqrt() as f32
+        };
+        Vec3::new(se(0), se(1), se(2))
+    }
+}
+
+/// A tracked pixel's estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackedPixel {
+    /// Pixel position.
+    pub pixel: (u32, u32),
+    /// Mean radiance.
+    pub mean: Vec3,
+    /// Standard error of the mean.
+    pub stderr: Vec3,
+    /// Samples taken.
+    pub samples: u64,
+}
+
+/// Samples per work item of [`track`]; fixed so results do not depend on threads.
+pub const TRACK_BATCH: u32 = 4096;
+
+/// Many samples at a few pixels (the papers' per-pixel ground truth), with
+/// standard errors. Work is split into batches of [`TRACK_BATCH`] samples,
+/// each with its own stream, and reduced in a fixed order.
+pub fn track(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u32)], spp: u32, seed: u64, frame: u64) -> Vec<TrackedPixel> {
+    let batches = spp.div_ceil(TRACK_BATCH);
+    let items: Vec<(usize, u32)> = (0..pixels.len()).flat_map(|p| (0..batches).map(move |b| (p, b))).collect();
+    let accs: Vec<Accumulator> = items
+        .par_iter()
+        .map(|&(p, b)| {
+            let (x, y) = pixels[p];
+            let n = TRACK_BATCH.min(spp - b * TRACK_BATCH);
+            let mut rng = stream(seed, frame, Purpose::TRACKED, ((p as u64) << 32) | b as u64);
+            let mut acc = Accumulator::default();
+            for _ in 0..n {
+                let (u, v) = rng.next_2d();
+                let lens = rng.next_2d();
+                acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
+            }
+            acc
+        })
+        .collect();
+    pixels
+        .iter()
+        .enumerate()
+        .map(|(p, &pixel)| {
+            let mut acc = Accumulator::default();
+            for a in &accs[p * batches as usize..(p + 1) * batches as usize] {
+                acc.merge(a);
+            }
+            TrackedPixel { pixel, mean: acc.mean(), stderr: acc.stderr(), samples: acc.count() }
+        })
+        .collect()
+}

@@ -17,5 +17,6 @@
 
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod compare;
 pub mod validation;

@@ -79,8 +79,15 @@ impl Mesh {
             for s in 0..segments {
                 let a = r * row + s;
                 let b = a + row;
-                // counter-clockwise seen from outside
-                for t in [[a, a + 1, b], [a + 1, b + 1, b]] {
+                // counter-clockwise seen from outside; the pole rows have one triangle per segment
+                let tris: &[[u32; 3]] = if r == 0 {
+                    &[[a + 1, b + 1, b]]
+                } else if r + 1 == rings {
+                    &[[a, a + 1, b]]
+                } else {
+                    &[[a, a + 1, b], [a + 1, b + 1, b]]
+                };
+                for t in tris {
                     self.triangles.push(TriangleDesc {
                         v: [base + t[0], base + t[1], base + t[2]],
                         n: Some([nbase + t[0], nbase + t[1], nbase + t[2]]),

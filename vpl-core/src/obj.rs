@@ -44,7 +44,9 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
             })
             .collect(),
         Err(e) => {
-            warnings.push(format!("{}: material library not loaded ({e}); using the default material", path.display()));
+            let libs = mtllib_names(path);
+            let named = if libs.is_empty() { "named by no mtllib line".to_string() } else { libs.join(", ") };
+            warnings.push(format!("{}: material library {named} not loaded ({e}); using the default material", path.display()));
             Vec::new()
         }
     };
@@ -73,4 +75,13 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
         }
     }
     Ok(ObjData { mesh, materials, warnings })
+}
+
+/// The file names of the `mtllib` statements of an OBJ file (for messages).
+fn mtllib_names(path: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
+    text.lines()
+        .filter_map(|l| l.trim_start().strip_prefix("mtllib "))
+        .flat_map(|rest| rest.split('#').next().unwrap_or("").split_whitespace().map(str::to_string).collect::<Vec<_>>())
+        .collect()
 }

@@ -97,7 +97,11 @@ impl SceneSetup {
         let lights_spec = file.lights.clone().or_else(|| defaults.as_ref().and_then(|d| d.lights.clone())).unwrap_or_default();
         let lights = lights_spec.iter().map(light_from_spec).collect::<Result<Vec<_>>>()?;
         let two_sided = file.geometry.two_sided.unwrap_or(two_sided_default);
-        let scene = Scene::new(name, &mesh, materials, lights, two_sided)?;
+        let scene = Scene::new(name, &mesh, materials, lights, two_sided).map_err(|e| match e {
+            // A missing material library is the likely reason for a dark OBJ: say so in the error.
+            CoreError::NoLights(n) if !warnings.is_empty() => CoreError::NoLights(format!("{n} ({})", warnings.join("; "))),
+            e => e,
+        })?;
         warnings.extend(scene.warnings.iter().cloned());
         let camera_spec = file.camera.clone().or_else(|| defaults.as_ref().and_then(|d| d.camera.clone()));
         let camera = match &camera_spec {
@@ -232,6 +236,20 @@ pub fn camera_from_spec(c: &CameraSpec) -> Result<Camera> {
     )
 }
 
+fn material_to_spec(m: &Material) -> crate::scene_file::MaterialSpec {
+    let l = m.layered.as_ref();
+    crate::scene_file::MaterialSpec {
+        name: m.name.clone(),
+        albedo: Some(m.albedo.into()),
+        emission: m.is_emissive().then(|| m.emission.into()),
+        kappa: l.map(|l| l.kappa),
+        specular: l.map(|l| l.specular.into()),
+        transmission: l.map(|l| l.transmission),
+        ior: l.map(|l| l.ior),
+        abbe: l.map(|l| l.abbe),
+    }
+}
+
 fn camera_to_spec(c: &Camera) -> CameraSpec {
     CameraSpec {
         origin: c.origin.into(),
@@ -285,7 +303,7 @@ impl builtin::Builtin {
             geometry: GeometrySpec { obj: None, builtin: Some(self.name.to_string()), up: "y".into(), scale: 1.0, two_sided: Some(self.two_sided) },
             camera: Some(self.camera.clone()),
             lights: Some(self.lights.clone()),
-            materials: Vec::new(),
+            materials: self.materials.iter().map(material_to_spec).collect(),
             sequence: Some(self.sequence.clone()),
         }
     }

@@ -116,6 +116,9 @@ impl PathTracer {
             }
             let f = albedo * FRAC_1_PI;
             let (u_sel, u_l0, u_l1, u_b0, u_b1) = (rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32());
+            // At the last vertex a BSDF-sampled ray could only find an emitter;
+            // light sampling alone (MIS weight 1) covers those paths without it.
+            let last = k + 1 == max_k;
             // Next-event estimation: a path with k + 1 scattering vertices.
             if k + 1 >= min_k {
                 if let Some((ls, p_sel)) = scene.sample_light(sp.p, u_sel, (u_l0, u_l1)) {
@@ -127,12 +130,15 @@ impl PathTracer {
                                 l += beta * f * ls.li * (cos / p_sel);
                             } else {
                                 let pdf_light = p_sel * ls.pdf;
-                                let w = power_heuristic(pdf_light, cos * FRAC_1_PI);
+                                let w = if last { 1.0 } else { power_heuristic(pdf_light, cos * FRAC_1_PI) };
                                 l += beta * f * ls.li * (cos * w / pdf_light);
                             }
                         }
                     }
                 }
+            }
+            if last {
+                break;
             }
             // Cosine-weighted BSDF sample: f·cos/pdf = ρ.
             let local = cosine_hemisphere(u_b0, u_b1);

@@ -31,7 +31,7 @@ pub fn build() -> Builtin {
     wall_x(&mut mesh, 12.0, 0.0, 2.5, h, &[], wall); // end of leg B
     mesh.push_box(Vec3::new(0.3, 0.0, -9.0), Vec3::new(1.2, 0.9, -8.0), crate_m, true);
     mesh.push_box(Vec3::new(1.4, 0.0, -12.5), Vec3::new(2.3, 1.4, -11.4), crate_m, true);
-    let lights = vec![LightSpec::Point { position: [9.0, 2.0, 1.25], intensity: [60.0, 55.0, 48.0] }];
+    let lights = vec![LightSpec::Point { position: [9.0, 2.0, 1.25], intensity: [240.0, 220.0, 190.0] }];
     let ck = |t: f32, z: f32| CameraKeySpec { t, origin: [1.25, 1.6, z], target: [1.1, 1.2, z - 6.0] };
     let sequence = SequenceSpec { fps: 30.0, duration: 20.0, camera: vec![ck(0.0, 0.5), ck(10.0, -4.0), ck(20.0, 0.5)], lights: Vec::new() };
     let c0 = &sequence.camera[0];

@@ -1,0 +1,60 @@
+//! Argument types of the `vpl` command line shared with `cargo xtask`.
+
+use std::str::FromStr;
+
+/// `--size WxH`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size(pub u32, pub u32);
+
+impl FromStr for Size {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size '{s}' must look like 320x240"))?;
+        let w: u32 = w.trim().parse().map_err(|_| format!("size '{s}': width is not a number"))?;
+        let h: u32 = h.trim().parse().map_err(|_| format!("size '{s}': height is not a number"))?;
+        if w == 0 || h == 0 {
+            return Err(format!("size '{s}' must be at least 1x1"));
+        }
+        if w > 16384 || h > 16384 {
+            return Err(format!("size '{s}' is larger than 16384 on a side"));
+        }
+        Ok(Size(w, h))
+    }
+}
+
+/// `--clamp <value | off>`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ClampArg {
+    /// No clamping.
+    Off,
+    /// Clamp the geometry term at this value (1/m²).
+    Value(f32),
+}
+
+impl FromStr for ClampArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "off" {
+            return Ok(ClampArg::Off);
+        }
+        match s.parse::<f32>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(ClampArg::Value(v)),
+            _ => Err(format!("clamp '{s}' must be a positive number or 'off'")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_sizes_and_clamps() {
+        assert_eq!("320x240".parse::<Size>().unwrap(), Size(320, 240));
+        assert!("0x10".parse::<Size>().is_err());
+        assert!("10".parse::<Size>().is_err());
+        assert_eq!("off".parse::<ClampArg>().unwrap(), ClampArg::Off);
+        assert_eq!("2.5".parse::<ClampArg>().unwrap(), ClampArg::Value(2.5));
+        assert!("-1".parse::<ClampArg>().is_err());
+    }
+}

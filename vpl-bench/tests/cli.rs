@@ -1,0 +1,115 @@
+//! The `vpl` binary on bad input: one line naming the problem, exit code 2,
+//! no panic, no output file. And on good input: an EXR, its PNG preview and
+//! the standard-error EXR.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn vpl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_vpl"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("vpl-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+/// Runs `vpl render` with `args`, expects exit 2, one stderr line containing `needle`, and no output file.
+fn fails(dir: &Path, args: &[&str], needle: &str) {
+    let out = dir.join("out.exr");
+    let o = vpl().arg("render").args(args).arg("--out").arg(&out).arg("--spp").arg("1").arg("--size").arg("8x8").output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("vpl: warning:")).collect();
+    assert_eq!(o.status.code(), Some(2), "{args:?}: status {:?}, stderr {err}", o.status);
+    assert_eq!(lines.len(), 1, "{args:?}: expected one line, got {err:?}");
+    assert!(lines[0].starts_with("vpl: error: ") && lines[0].contains(needle), "{args:?}: {:?} lacks {needle:?}", lines[0]);
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert!(!out.exists() && !dir.join("out.png").exists(), "{args:?}: output written");
+    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).collect();
+    assert!(leftovers.is_empty(), "{args:?}: temporary files left");
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_code_2() {
+    let d = scratch("bad");
+    let malformed = write(&d, "malformed.obj", "v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n");
+    let nan = write(&d, "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+    let zero = write(&d, "zero.obj", "mtllib z.mtl\nusemtl e\nv 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    write(&d, "z.mtl", "newmtl e\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    let empty = write(&d, "empty.obj", "# no faces\nv 0 0 0\n");
+    let dark = write(&d, "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let nomtl = write(&d, "nomtl.obj", "mtllib missing.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let fov0 = write(&d, "fov0.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 0\n");
+    let fovneg = write(&d, "fovneg.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = -10\n");
+    let missing = d.join("missing.obj").to_string_lossy().into_owned();
+    fails(&d, &["--scene", &malformed], "malformed OBJ");
+    fails(&d, &["--scene", &missing], "cannot read");
+    fails(&d, &["--scene", &nomtl], "no lights");
+    fails(&d, &["--scene", &nan], "non-finite vertex");
+    fails(&d, &["--scene", &zero], "is empty");
+    fails(&d, &["--scene", &empty], "is empty");
+    fails(&d, &["--scene", &dark], "no lights");
+    fails(&d, &["--scene", &fov0], "field of view");
+    fails(&d, &["--scene", &fovneg], "field of view");
+    fails(&d, &["--scene", "cornell", "--size", "0x8"], "size");
+    fails(&d, &["--scene", "cornell", "--spp", "0"], "spp");
+    fails(&d, &["--scene", "cornell", "--frame", "100000"], "past the end");
+    fails(&d, &["--scene", "nowhere"], "unknown built-in");
+    fails(&d, &["--scene", "cornell", "--mode", "sideways"], "sideways");
+    fails(&d, &["--scene", "cornell", "--clamp", "-3"], "clamp");
+    fails(&d, &["--scene", "cornell", "--threads", "0"], "threads");
+    // A missing MTL is named in a warning line before the error.
+    let o = vpl().args(["render", "--scene", &nomtl, "--out"]).arg(d.join("x.exr")).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.mtl"));
+}
+
+#[test]
+fn unwritable_output_is_an_error_before_rendering() {
+    let d = scratch("unwritable");
+    for out in [d.join("no/such/dir/a.exr"), d.clone()] {
+        let o = vpl().args(["render", "--scene", "cornell", "--spp", "1", "--size", "8x8", "--out"]).arg(&out).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("cannot write"), "{err}");
+    }
+    let o = vpl().args(["render", "--scene", "cornell", "--spp", "1", "--size", "8x8", "--out"]).arg(d.join("a.exr")).arg("--stderr").arg(d.join("none/se.exr")).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!d.join("a.exr").exists(), "nothing written when any output is unwritable");
+}
+
+#[test]
+fn render_writes_exr_png_and_stderr() {
+    let d = scratch("good");
+    let out = d.join("c.exr");
+    let se = d.join("c_se.exr");
+    let o = vpl().args(["render", "--scene", "cornell", "--spp", "4", "--size", "32x32", "--mode", "indirect", "--threads", "2", "--out"]).arg(&out).arg("--stderr").arg(&se).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = vpl_core::Image::read_exr(&out).unwrap();
+    assert_eq!((img.width, img.height), (32, 32));
+    assert!(img.mean()[0] > 0.0);
+    assert!(d.join("c.png").exists());
+    assert!(vpl_core::Image::read_exr(&se).unwrap().mean()[0] > 0.0);
+}
+
+#[test]
+fn export_scene_round_trips_through_render() {
+    let d = scratch("export");
+    for name in ["cornell", "maze", "glass"] {
+        let o = vpl().args(["export-scene", name]).output().unwrap();
+        assert!(o.status.success());
+        let text = String::from_utf8(o.stdout).unwrap();
+        assert!(text.contains(&format!("builtin = \"{name}\"")), "{text}");
+        let toml = write(&d, &format!("{name}.toml"), &text);
+        let r = vpl().args(["render", "--scene", &toml, "--spp", "1", "--size", "8x8", "--quiet", "--out"]).arg(d.join(format!("{name}.exr"))).output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+}

@@ -147,7 +147,8 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         readme.push_str("## Validation against Mitsuba 3 (`validation/`)\n\n");
         let md = std::fs::read_to_string(dir.join("cornell_validation.md")).map_err(|e| e.to_string())?;
         readme.push_str(md.trim_start_matches("# Path tracer vs Mitsuba 3.9.1 on `cornell`\n\n"));
-        readme.push_str("\nDifference (ours − Mitsuba) and |z| images: `validation/cornell_<mode>_difference.exr`, `validation/cornell_<mode>_z.exr`.\n\n");
+        readme.push_str("\nDifference (ours − Mitsuba) and |z| images: `validation/cornell_<mode>_difference.exr`, `validation/cornell_<mode>_z.exr`; \
+         failing pixels in red: ![full](validation/cornell_full_z.png) ![direct](validation/cornell_direct_z.png) ![indirect](validation/cornell_indirect_z.png)\n\n");
         timings.push(("validation", t.elapsed().as_secs_f64()));
     }
     readme.push_str("## Run\n\n| job | wall time (s) |\n| --- | --- |\n");

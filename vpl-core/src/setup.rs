@@ -309,3 +309,39 @@ impl builtin::Builtin {
     }
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn light_specs_become_lights() {
+        let spot = light_from_spec(&LightSpec::Spot { position: [0.0, 2.0, 0.0], direction: [0.0, -2.0, 0.0], intensity: [5.0; 3], angle: 60.0, falloff_start: None }).unwrap();
+        match spot {
+            Light::Spot { direction, cos_total, cos_falloff_start, .. } => {
+                assert_eq!(direction, -Vec3::Y);
+                assert!((cos_total - 0.5).abs() < 1e-6);
+                assert!((cos_falloff_start - 48f32.to_radians().cos()).abs() < 1e-6);
+            }
+            _ => panic!("not a spot"),
+        }
+        assert!(light_from_spec(&LightSpec::Directional { direction: [0.0; 3], irradiance: [1.0; 3] }).is_err());
+        assert!(light_from_spec(&LightSpec::Point { position: [0.0; 3], intensity: [-1.0, 1.0, 1.0] }).is_err());
+    }
+
+    #[test]
+    fn sun_direction_keys_turn_the_sun() {
+        let text = "[geometry]\nbuiltin = \"courtyard\"\n[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = [1, 1, 1]\n\
+                    [sequence]\nduration = 2.0\nlights = [ { light = 0, t = 0.0, direction = [0, -1, 0] }, { light = 0, t = 2.0, direction = [1, -1, 0] } ]\n";
+        let f = SceneFile::parse(text, Path::new("s.toml")).unwrap();
+        let s = SceneSetup::from_file(f, Path::new("")).unwrap();
+        let (scene, _) = s.frame(60).unwrap();
+        match &scene.lights[0] {
+            Light::Directional { direction, .. } => assert!((*direction - Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-5),
+            l => panic!("{l:?}"),
+        }
+        let bad = "[geometry]\nbuiltin = \"courtyard\"\n[sequence]\nduration = 2.0\nlights = [ { light = 3, t = 0.0 } ]\n";
+        let f = SceneFile::parse(bad, Path::new("s.toml")).unwrap();
+        assert!(SceneSetup::from_file(f, Path::new("")).unwrap_err().to_string().contains("light 3"));
+    }
+}

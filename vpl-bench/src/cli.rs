@@ -22,6 +22,20 @@ impl FromStr for Size {
     }
 }
 
+/// `--pixel X,Y`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelArg(pub u32, pub u32);
+
+impl FromStr for PixelArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (x, y) = s.split_once(',').ok_or_else(|| format!("pixel '{s}' must look like 12,34"))?;
+        let x = x.trim().parse().map_err(|_| format!("pixel '{s}': x is not a non-negative integer"))?;
+        let y = y.trim().parse().map_err(|_| format!("pixel '{s}': y is not a non-negative integer"))?;
+        Ok(PixelArg(x, y))
+    }
+}
+
 /// `--clamp <value | off>`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ClampArg {
@@ -56,5 +70,7 @@ mod tests {
         assert_eq!("off".parse::<ClampArg>().unwrap(), ClampArg::Off);
         assert_eq!("2.5".parse::<ClampArg>().unwrap(), ClampArg::Value(2.5));
         assert!("-1".parse::<ClampArg>().is_err());
+        assert_eq!("3,4".parse::<PixelArg>().unwrap(), PixelArg(3, 4));
+        assert!("3".parse::<PixelArg>().is_err());
     }
 }

@@ -113,3 +113,19 @@ fn export_scene_round_trips_through_render() {
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     }
 }
+
+#[test]
+fn track_prints_csv_with_standard_errors() {
+    let o = vpl().args(["track", "--scene", "cornell", "--pixel", "128,128", "--pixel", "10,250", "--spp", "256"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3);
+    assert!(lines[0].starts_with("x,y,r,g,b,stderr_r"));
+    let f: Vec<f64> = lines[1].split(',').map(|v| v.parse().unwrap()).collect();
+    assert_eq!((f[0], f[1], f[8]), (128.0, 128.0, 256.0));
+    assert!(f[2] > 0.0 && f[5] > 0.0);
+    let o = vpl().args(["track", "--scene", "cornell", "--pixel", "999,1"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("outside"));
+}

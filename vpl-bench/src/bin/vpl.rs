@@ -7,10 +7,10 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use vpl_bench::cli::{ClampArg, Size};
+use vpl_bench::cli::{ClampArg, PixelArg, Size};
 use vpl_core::image::{preview_path, write_atomic};
 use vpl_core::{GeometryClamp, SceneSetup};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{render, track, Mode, PathTracer, RenderSettings};
 
 #[derive(Parser)]
 #[command(name = "vpl", version, about = "Virtual-point-light global illumination toolkit")]
@@ -82,6 +82,42 @@ enum Command {
         /// No progress bar or summary.
         #[arg(long)]
         quiet: bool,
+    },
+    /// Many path-traced samples at a few pixels: ground truth with standard errors, as CSV.
+    Track {
+        /// A built-in name, a .toml scene file or an .obj file.
+        #[arg(long)]
+        scene: String,
+        /// Frame of the scene's sequence.
+        #[arg(long, default_value_t = 0)]
+        frame: u32,
+        /// Which light paths to include.
+        #[arg(long, value_enum, default_value_t = ModeArg::Indirect)]
+        mode: ModeArg,
+        /// Longest path in segments.
+        #[arg(long, default_value_t = 5)]
+        max_depth: u32,
+        /// Geometry-term clamp of the segment leaving the primary hit, or off.
+        #[arg(long, default_value = "off", allow_hyphen_values = true)]
+        clamp: ClampArg,
+        /// A pixel X,Y (repeat for more).
+        #[arg(long = "pixel", required = true)]
+        pixels: Vec<PixelArg>,
+        /// Samples per pixel.
+        #[arg(long, default_value_t = 65536)]
+        spp: u32,
+        /// Image size WxH the pixels refer to (default: the scene camera's).
+        #[arg(long)]
+        size: Option<Size>,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Write the CSV here instead of standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Print a built-in scene (or any scene) as a TOML scene file.
     ExportScene {
@@ -173,6 +209,42 @@ fn check_writable(path: &Path) -> Res<()> {
     Ok(())
 }
 
+/// Loads a scene, checks the frame against its sequence, and applies `--size`.
+fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Scene, vpl_core::Camera)> {
+    let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
+    for w in &setup.warnings {
+        eprintln!("vpl: warning: {w}");
+    }
+    if let Some(seq) = &setup.sequence {
+        if frame >= seq.frame_count() {
+            return Err(format!("--frame {frame} is past the end of the sequence ({} frames)", seq.frame_count()));
+        }
+    } else if frame > 0 {
+        return Err(format!("--frame {frame}: the scene has no sequence"));
+    }
+    let (sc, mut camera) = setup.frame(frame).map_err(|e| e.to_string())?;
+    if let Some(Size(w, h)) = size {
+        camera = camera.with_resolution((w, h)).map_err(|e| e.to_string())?;
+    }
+    Ok((sc, camera))
+}
+
+/// The path tracer that `--max-depth`, `--mode` and `--clamp` describe.
+fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> PathTracer {
+    let mut pt = PathTracer::new(
+        max_depth,
+        match mode {
+            ModeArg::Full => Mode::Full,
+            ModeArg::Direct => Mode::Direct,
+            ModeArg::Indirect => Mode::Indirect,
+        },
+    );
+    if let ClampArg::Value(v) = clamp {
+        pt.clamp = Some(GeometryClamp::new(v));
+    }
+    pt
+}
+
 fn run(cli: Cli) -> Res<()> {
     match cli.command {
         Command::Render { scene, frame, method, mode, spp, max_depth, clamp, size, seed, threads, out, stderr, exposure, quiet } => {
@@ -193,32 +265,8 @@ fn run(cli: Cli) -> Res<()> {
                 check_writable(s)?;
             }
             let pool = pool(threads)?;
-            let setup = SceneSetup::load(&scene).map_err(|e| e.to_string())?;
-            for w in &setup.warnings {
-                eprintln!("vpl: warning: {w}");
-            }
-            if let Some(seq) = &setup.sequence {
-                if frame >= seq.frame_count() {
-                    return Err(format!("--frame {frame} is past the end of the sequence ({} frames)", seq.frame_count()));
-                }
-            } else if frame > 0 {
-                return Err(format!("--frame {frame}: the scene has no sequence"));
-            }
-            let (sc, mut camera) = setup.frame(frame).map_err(|e| e.to_string())?;
-            if let Some(Size(w, h)) = size {
-                camera = camera.with_resolution((w, h)).map_err(|e| e.to_string())?;
-            }
-            let mut pt = PathTracer::new(
-                max_depth,
-                match mode {
-                    ModeArg::Full => Mode::Full,
-                    ModeArg::Direct => Mode::Direct,
-                    ModeArg::Indirect => Mode::Indirect,
-                },
-            );
-            if let ClampArg::Value(v) = clamp {
-                pt.clamp = Some(GeometryClamp::new(v));
-            }
+            let (sc, camera) = load_frame(&scene, frame, size)?;
+            let pt = tracer(max_depth, mode, clamp);
             let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
             bar.set_style(ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "));
             let start = Instant::now();
@@ -247,6 +295,40 @@ fn run(cli: Cli) -> Res<()> {
                 );
             }
             Ok(())
+        }
+        Command::Track { scene, frame, mode, max_depth, clamp, pixels, spp, size, seed, threads, out } => {
+            if spp == 0 {
+                return Err("--spp must be at least 1".into());
+            }
+            if max_depth == 0 {
+                return Err("--max-depth must be at least 1".into());
+            }
+            if let Some(p) = &out {
+                check_writable(p)?;
+            }
+            let pool = pool(threads)?;
+            let (sc, camera) = load_frame(&scene, frame, size)?;
+            let (w, h) = camera.resolution;
+            if let Some(p) = pixels.iter().find(|p| p.0 >= w || p.1 >= h) {
+                return Err(format!("--pixel {},{} is outside the {w}x{h} image", p.0, p.1));
+            }
+            let pt = tracer(max_depth, mode, clamp);
+            let px: Vec<(u32, u32)> = pixels.iter().map(|p| (p.0, p.1)).collect();
+            let ts = pool.install(|| track(&sc, &camera, &pt, &px, spp, seed, frame as u64));
+            let mut csv = String::from("x,y,r,g,b,stderr_r,stderr_g,stderr_b,samples\n");
+            for t in ts {
+                csv.push_str(&format!(
+                    "{},{},{},{},{},{},{},{},{}\n",
+                    t.pixel.0, t.pixel.1, t.mean.x, t.mean.y, t.mean.z, t.stderr.x, t.stderr.y, t.stderr.z, t.samples
+                ));
+            }
+            match out {
+                Some(p) => write_atomic(&p, csv.as_bytes()).map_err(|e| e.to_string()),
+                None => {
+                    print!("{csv}");
+                    Ok(())
+                }
+            }
         }
         Command::ExportScene { name, out } => {
             let setup = SceneSetup::load(&name).map_err(|e| e.to_string())?;

@@ -59,7 +59,7 @@ fn cbox_obj_renders_the_same_as_builtin_cornell() {
     let s = RenderSettings { spp: 64, seed: 5, frame: 0 };
     let a = render(&file.scene, &cam, &pt, s, &|_, _| {}).unwrap();
     let b = render(&builtin.scene, &cam, &pt, s, &|_, _| {}).unwrap();
-    let c = compare(&a.image, &a.stderr, &b.image, &b.stderr, 0.01);
+    let c = compare(&a.image, &a.stderr, &b.image, &b.stderr, 0.01).unwrap();
     assert!(c.pass_rate >= 0.99, "{}", c.pass_rate);
     for k in 0..3 {
         assert!((c.mean_a[k] - c.mean_b[k]).abs() <= 1e-4 * c.mean_b[k], "{:?} vs {:?}", c.mean_a, c.mean_b);

@@ -20,7 +20,7 @@ const SPP: u32 = 2048;
 
 #[test]
 fn path_tracer_matches_mitsuba_full_direct_indirect() {
-    let vs = validate_cornell(&data_dir().join("cornell-box"), SPP, 1, &|_| {}).unwrap();
+    let vs = validate_cornell(&data_dir().join("cornell-box"), SPP, 1, &|_, _, _| {}).unwrap();
     let mut failures = Vec::new();
     for v in &vs {
         let c = &v.comparison;

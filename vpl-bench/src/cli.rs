@@ -15,8 +15,9 @@ impl FromStr for Size {
         if w == 0 || h == 0 {
             return Err(format!("size '{s}' must be at least 1x1"));
         }
-        if w > 16384 || h > 16384 {
-            return Err(format!("size '{s}' is larger than 16384 on a side"));
+        let max = vpl_core::camera::MAX_RESOLUTION;
+        if w > max || h > max {
+            return Err(format!("size '{s}' is larger than {max} on a side"));
         }
         Ok(Size(w, h))
     }

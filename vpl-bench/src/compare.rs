@@ -3,7 +3,7 @@
 //! image means.
 
 use vpl_core::glam::Vec3;
-use vpl_core::Image;
+use vpl_core::{CoreError, Image};
 
 /// Result of comparing an estimate with a reference.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,8 +70,19 @@ fn inverse_normal_cdf(p: f64) -> f64 {
 ///
 /// The means are compared with the standard error of each image mean taken
 /// as sqrt(Σ se²) / N (pixels are independent estimates).
-pub fn compare(a: &Image, a_se: &Image, b: &Image, b_se: &Image, alpha: f64) -> Comparison {
-    assert!(a.width == b.width && a.height == b.height && a_se.data.len() == a.data.len() && b_se.data.len() == b.data.len());
+///
+/// Errors when the four images do not all have the same size.
+pub fn compare(a: &Image, a_se: &Image, b: &Image, b_se: &Image, alpha: f64) -> Result<Comparison, CoreError> {
+    let size = |i: &Image| (i.width, i.height);
+    if size(a) != size(b) || size(a) != size(a_se) || size(b) != size(b_se) || a.data.is_empty() {
+        return Err(CoreError::Image(format!(
+            "cannot compare images of sizes {:?}, {:?} (standard errors {:?}, {:?})",
+            size(a),
+            size(b),
+            size(a_se),
+            size(b_se)
+        )));
+    }
     let zc = z_critical(alpha / 3.0);
     let n = a.data.len();
     let mut pass = 0usize;
@@ -104,7 +115,7 @@ pub fn compare(a: &Image, a_se: &Image, b: &Image, b_se: &Image, alpha: f64) -> 
         mean_se[c] = var_sum[c].sqrt() / n as f64;
         mean_z[c] = (mean_a[c] - mean_b[c]) / mean_se[c].max(f64::MIN_POSITIVE);
     }
-    Comparison { pixels: n, pass_rate: pass as f64 / n as f64, alpha, mean_a, mean_b, mean_z, mean_se, rel_mse: rel / (3 * n) as f64, z_image }
+    Ok(Comparison { pixels: n, pass_rate: pass as f64 / n as f64, alpha, mean_a, mean_b, mean_z, mean_se, rel_mse: rel / (3 * n) as f64, z_image })
 }
 
 /// A signed difference image a − b, for writing next to a failed comparison.
@@ -129,13 +140,14 @@ mod tests {
             *p = Vec3::splat(1.0 + i as f32 * 0.01);
         }
         let se = Image { width: 10, height: 10, data: vec![Vec3::splat(0.01); 100] };
-        let same = compare(&a, &se, &a, &se, 0.01);
+        let same = compare(&a, &se, &a, &se, 0.01).unwrap();
         assert_eq!(same.pass_rate, 1.0);
         let mut b = a.clone();
         for p in b.data.iter_mut() {
             *p += Vec3::splat(0.1);
         }
-        let c = compare(&a, &se, &b, &se, 0.01);
+        let c = compare(&a, &se, &b, &se, 0.01).unwrap();
+        assert!(compare(&a, &se, &Image::new(3, 3), &se, 0.01).is_err());
         assert_eq!(c.pass_rate, 0.0);
         assert!(c.mean_z[0] < -4.0);
     }

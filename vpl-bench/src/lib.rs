@@ -10,7 +10,7 @@
 //!
 //! let a = Image { width: 1, height: 1, data: vec![Vec3::splat(1.0)] };
 //! let se = Image { width: 1, height: 1, data: vec![Vec3::splat(0.1)] };
-//! let c = compare(&a, &se, &a, &se, 0.01);
+//! let c = compare(&a, &se, &a, &se, 0.01).unwrap();
 //! assert_eq!(c.pass_rate, 1.0);
 //! assert!((z_critical(0.01) - 2.576).abs() < 1e-3);
 //! ```

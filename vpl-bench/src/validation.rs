@@ -33,18 +33,19 @@ pub const MODES: [(&str, Mode, u32, &str); 3] = [
     ("indirect", Mode::Indirect, 5, "reference_indirect"),
 ];
 
-/// Renders `cornell` at `spp` in the three modes and compares with the references in `data_dir`.
-pub fn validate_cornell(data_dir: &Path, spp: u32, seed: u64, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<ModeValidation>, CoreError> {
+/// Renders `cornell` at `spp` in the three modes and compares with the
+/// references in `data_dir`. `progress(mode, pixels_done, pixels_total)` is
+/// called as the renders advance.
+pub fn validate_cornell(data_dir: &Path, spp: u32, seed: u64, progress: &(dyn Fn(&str, u64, u64) + Sync)) -> Result<Vec<ModeValidation>, CoreError> {
     let setup = SceneSetup::load("cornell")?;
     let mut out = Vec::new();
     for (name, mode, depth, stem) in MODES {
-        progress(name);
         let reference = Image::read_exr(data_dir.join(format!("{stem}.exr")))?;
         let reference_se = Image::read_exr(data_dir.join(format!("{stem}_stderr.exr")))?;
         let pt = PathTracer::new(depth, mode);
-        let r = render(&setup.scene, &setup.camera, &pt, RenderSettings { spp, seed, frame: 0 }, &|_, _| {})
+        let r = render(&setup.scene, &setup.camera, &pt, RenderSettings { spp, seed, frame: 0 }, &|d, t| progress(name, d, t))
             .map_err(|e| CoreError::Invalid(e.to_string()))?;
-        let comparison = compare(&r.image, &r.stderr, &reference, &reference_se, 0.01);
+        let comparison = compare(&r.image, &r.stderr, &reference, &reference_se, 0.01)?;
         out.push(ModeValidation { mode: name, reference: stem, comparison, ours: (r.image, r.stderr), theirs: (reference, reference_se), seconds: r.seconds });
     }
     Ok(out)

@@ -10,6 +10,9 @@ use crate::ray::Ray;
 use crate::sampling::concentric_disk;
 use glam::Vec3;
 
+/// Largest image side accepted (keeps a typo in a scene file from allocating terabytes).
+pub const MAX_RESOLUTION: u32 = 16384;
+
 /// Which image axis the field of view spans.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -72,6 +75,9 @@ impl Camera {
         }
         if resolution.0 == 0 || resolution.1 == 0 {
             return Err(CoreError::Camera(format!("image size must be positive, got {}x{}", resolution.0, resolution.1)));
+        }
+        if resolution.0 > MAX_RESOLUTION || resolution.1 > MAX_RESOLUTION {
+            return Err(CoreError::Camera(format!("image size {}x{} exceeds {MAX_RESOLUTION} on a side", resolution.0, resolution.1)));
         }
         if !(lens_radius >= 0.0) || !(focus_distance > 0.0) {
             return Err(CoreError::Camera("lens radius must be ≥ 0 and focus distance > 0".into()));
@@ -195,6 +201,7 @@ mod tests {
         assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 0.0, FovAxis::X, (2, 2)).is_err());
         assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, -5.0, FovAxis::X, (2, 2)).is_err());
         assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (0, 2)).is_err());
+        assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (2, MAX_RESOLUTION + 1)).is_err());
         assert!(Camera::new(Vec3::Z, Vec3::Z, Vec3::Y, 40.0, FovAxis::X, (2, 2)).is_err());
     }
 }

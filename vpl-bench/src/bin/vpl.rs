@@ -372,7 +372,15 @@ fn run(cli: Cli) -> Res<()> {
                 return Err("--spp must be at least 1".into());
             }
             std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-            let vs = vpl_bench::validation::validate_cornell(&data, spp, seed, &|m| eprintln!("vpl: validating {m} …")).map_err(|e| e.to_string())?;
+            let bar = ProgressBar::new(3 * 256 * 256);
+            bar.set_style(ProgressStyle::with_template("{msg:>9} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}").unwrap().progress_chars("=> "));
+            let vs = vpl_bench::validation::validate_cornell(&data, spp, seed, &|m, d, t| {
+                let k = vpl_bench::validation::MODES.iter().position(|x| x.0 == m).unwrap_or(0) as u64;
+                bar.set_message(m.to_string());
+                bar.set_position(k * t + d);
+            })
+            .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
             for v in &vs {
                 vpl_bench::validation::write_difference(v, &out).map_err(|e| e.to_string())?;
                 v.ours.0.write_png(out.join(format!("cornell_{}_ours.png", v.mode)), 1.0).map_err(|e| e.to_string())?;

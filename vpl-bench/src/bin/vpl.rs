@@ -36,16 +36,38 @@ enum ModeArg {
     Indirect,
 }
 
+/// What to render: scene, frame, path tracer settings, threads.
+#[derive(clap::Args)]
+struct SceneArgs {
+    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file or an .obj file.
+    #[arg(long)]
+    scene: String,
+    /// Frame of the scene's sequence.
+    #[arg(long, default_value_t = 0)]
+    frame: u32,
+    /// Longest path in segments (Mitsuba 3's convention: 5 = direct + 3 indirect bounces).
+    #[arg(long, default_value_t = 5)]
+    max_depth: u32,
+    /// Geometry-term clamp of the segment leaving the primary hit (§5.4 of the SMC paper), or off.
+    #[arg(long, default_value = "off", allow_hyphen_values = true)]
+    clamp: ClampArg,
+    /// Image size WxH (default: the scene camera's).
+    #[arg(long)]
+    size: Option<Size>,
+    /// Seed of all random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render one frame of a scene.
     Render {
-        /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file or an .obj file.
-        #[arg(long)]
-        scene: String,
-        /// Frame of the scene's sequence.
-        #[arg(long, default_value_t = 0)]
-        frame: u32,
+        #[command(flatten)]
+        s: SceneArgs,
         /// Rendering method.
         #[arg(long, value_enum, default_value_t = Method::Path)]
         method: Method,
@@ -55,21 +77,6 @@ enum Command {
         /// Samples per pixel (path).
         #[arg(long, default_value_t = 64)]
         spp: u32,
-        /// Longest path in segments (Mitsuba 3's convention: 5 = direct + 3 indirect bounces).
-        #[arg(long, default_value_t = 5)]
-        max_depth: u32,
-        /// Geometry-term clamp of the segment leaving the primary hit (§5.4 of the SMC paper), or off.
-        #[arg(long, default_value = "off", allow_hyphen_values = true)]
-        clamp: ClampArg,
-        /// Image size WxH (default: the scene camera's).
-        #[arg(long)]
-        size: Option<Size>,
-        /// Seed of all random streams.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Worker threads (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
         /// Output EXR; a PNG preview is written beside it.
         #[arg(long, default_value = "render.exr")]
         out: PathBuf,
@@ -85,36 +92,17 @@ enum Command {
     },
     /// Many path-traced samples at a few pixels: ground truth with standard errors, as CSV.
     Track {
-        /// A built-in name, a .toml scene file or an .obj file.
-        #[arg(long)]
-        scene: String,
-        /// Frame of the scene's sequence.
-        #[arg(long, default_value_t = 0)]
-        frame: u32,
+        #[command(flatten)]
+        s: SceneArgs,
         /// Which light paths to include.
         #[arg(long, value_enum, default_value_t = ModeArg::Indirect)]
         mode: ModeArg,
-        /// Longest path in segments.
-        #[arg(long, default_value_t = 5)]
-        max_depth: u32,
-        /// Geometry-term clamp of the segment leaving the primary hit, or off.
-        #[arg(long, default_value = "off", allow_hyphen_values = true)]
-        clamp: ClampArg,
         /// A pixel X,Y (repeat for more).
         #[arg(long = "pixel", required = true)]
         pixels: Vec<PixelArg>,
         /// Samples per pixel.
         #[arg(long, default_value_t = 65536)]
         spp: u32,
-        /// Image size WxH the pixels refer to (default: the scene camera's).
-        #[arg(long)]
-        size: Option<Size>,
-        /// Seed.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Worker threads (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
         /// Write the CSV here instead of standard output.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -247,7 +235,7 @@ fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> PathTracer {
 
 fn run(cli: Cli) -> Res<()> {
     match cli.command {
-        Command::Render { scene, frame, method, mode, spp, max_depth, clamp, size, seed, threads, out, stderr, exposure, quiet } => {
+        Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, size, seed, threads }, method, mode, spp, out, stderr, exposure, quiet } => {
             if method != Method::Path {
                 return Err(format!("--method {} is not available yet: this build renders with --method path", format!("{method:?}").to_lowercase()));
             }
@@ -296,7 +284,7 @@ fn run(cli: Cli) -> Res<()> {
             }
             Ok(())
         }
-        Command::Track { scene, frame, mode, max_depth, clamp, pixels, spp, size, seed, threads, out } => {
+        Command::Track { s: SceneArgs { scene, frame, max_depth, clamp, size, seed, threads }, mode, pixels, spp, out } => {
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
             }

@@ -369,3 +369,48 @@ fn barycentrics(t: &TriangleData, p: Vec3) -> (f32, f32) {
     let b2 = (d00 * d21 - d01 * d20) / denom;
     (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0 - b1.clamp(0.0, 1.0)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setup::SceneSetup;
+
+    fn quad_scene(lights: Vec<Light>, emission: Vec3) -> Scene {
+        let mut mesh = Mesh::default();
+        mesh.push_quad(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0), 0);
+        Scene::new("q", &mesh, vec![Material::emissive("m", Vec3::splat(0.5), emission)], lights, true).unwrap()
+    }
+
+    #[test]
+    fn lights_are_selected_in_proportion_to_power() {
+        let p = |i: f32| Light::Point { position: Vec3::Y, intensity: Vec3::splat(i) };
+        let s = quad_scene(vec![p(1.0), p(3.0)], Vec3::ZERO);
+        assert!((s.light_distribution.pmf(0) - 0.25).abs() < 1e-6 && (s.light_distribution.pmf(1) - 0.75).abs() < 1e-6);
+        // An emissive quad of area 4 and Le = 1 has power 4π, the same as a point light of 1 W/sr.
+        let s = quad_scene(vec![p(1.0)], Vec3::ONE);
+        assert_eq!(s.lights.len(), 3);
+        let area: f32 = (0..2).map(|i| s.light_distribution.pmf(i)).sum();
+        assert!((area - 0.5).abs() < 1e-6, "{area}");
+    }
+
+    #[test]
+    fn emission_is_one_sided_and_light_pdf_matches_sampling() {
+        let s = quad_scene(vec![], Vec3::ONE);
+        let y = s.surface_point(0, 0.2, 0.2);
+        assert_eq!(s.emitted(&y, Vec3::Y), Vec3::ONE);
+        assert_eq!(s.emitted(&y, -Vec3::Y), Vec3::ZERO);
+        let x = Vec3::new(0.1, 2.0, 0.3);
+        let (ls, p_sel) = s.sample_light(x, 0.1, (0.4, 0.3)).unwrap();
+        let hit = s.intersect(&Ray::new(x, ls.wi)).unwrap();
+        assert!((s.light_pdf(x, &hit.point) - p_sel * ls.pdf).abs() < 1e-4 * ls.pdf);
+    }
+
+    #[test]
+    fn visibility_through_the_cornell_box() {
+        let s = SceneSetup::load("cornell").unwrap().scene;
+        // Through the tall box (x ∈ [−0.71, 0.05], z ∈ [−0.66, 0.10], y < 0.21): blocked.
+        assert!(!s.visible(Vec3::new(-0.9, 0.0, -0.3), Vec3::new(0.3, 0.0, -0.3)));
+        // Above it: free.
+        assert!(s.visible(Vec3::new(-0.9, 0.5, -0.3), Vec3::new(0.3, 0.5, -0.3)));
+    }
+}

@@ -62,6 +62,5 @@ pub fn build() -> Builtin {
         camera: vec![ck(0.0, -10.0), ck(12.0, 0.0), ck(24.0, -10.0)],
         lights: vec![lk(0.0, -12.0, 0.0), lk(8.0, 0.0, 3.5), lk(16.0, 10.0, -3.5), lk(24.0, -12.0, 0.0)],
     };
-    let c0 = &sequence.camera[0];
-    Builtin { name: "atrium", mesh, materials, lights, camera: super::camera(c0.origin, c0.target, 70.0, [320, 240]), sequence, two_sided: true }
+    Builtin::from_sequence("atrium", mesh, materials, lights, sequence, 70.0)
 }

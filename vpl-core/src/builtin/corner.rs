@@ -34,6 +34,5 @@ pub fn build() -> Builtin {
     let lights = vec![LightSpec::Point { position: [9.0, 2.0, 1.25], intensity: [240.0, 220.0, 190.0] }];
     let ck = |t: f32, z: f32| CameraKeySpec { t, origin: [1.25, 1.6, z], target: [1.1, 1.2, z - 6.0] };
     let sequence = SequenceSpec { fps: 30.0, duration: 20.0, camera: vec![ck(0.0, 0.5), ck(10.0, -4.0), ck(20.0, 0.5)], lights: Vec::new() };
-    let c0 = &sequence.camera[0];
-    Builtin { name: "corner", mesh, materials, lights, camera: super::camera(c0.origin, c0.target, 65.0, [320, 240]), sequence, two_sided: true }
+    Builtin::from_sequence("corner", mesh, materials, lights, sequence, 65.0)
 }

@@ -49,14 +49,6 @@ pub fn build() -> Builtin {
         .map(|&(x, z)| Vec3::new(x, 1.7, z))
         .collect();
     let sequence = walk(&pts, 24.0, 3.0);
-    let c0 = &sequence.camera[0];
-    Builtin {
-        name: "courtyard",
-        mesh,
-        materials,
-        lights: vec![LightSpec::Directional { direction: [0.45, -0.55, -0.7], irradiance: [3.2, 3.0, 2.6] }],
-        camera: super::camera(c0.origin, c0.target, 70.0, [320, 240]),
-        sequence,
-        two_sided: true,
-    }
+    let sun = LightSpec::Directional { direction: [0.45, -0.55, -0.7], irradiance: [3.2, 3.0, 2.6] };
+    Builtin::from_sequence("courtyard", mesh, materials, vec![sun], sequence, 70.0)
 }

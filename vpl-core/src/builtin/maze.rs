@@ -96,14 +96,5 @@ pub fn build() -> Builtin {
     path.reverse();
     let pts: Vec<Vec3> = path.iter().take(25).map(|&(i, j)| Vec3::new((i as f32 + 0.5) * CELL, 1.6, (j as f32 + 0.5) * CELL)).collect();
     let sequence = walk(&pts, 24.0, 1.5);
-    let c0 = &sequence.camera[0];
-    Builtin {
-        name: "maze",
-        mesh,
-        materials,
-        lights: Vec::new(),
-        camera: super::camera(c0.origin, c0.target, 70.0, [320, 240]),
-        sequence,
-        two_sided: true,
-    }
+    Builtin::from_sequence("maze", mesh, materials, Vec::new(), sequence, 70.0)
 }

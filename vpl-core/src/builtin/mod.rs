@@ -47,6 +47,16 @@ pub struct Builtin {
     pub two_sided: bool,
 }
 
+impl Builtin {
+    /// A two-sided scene whose camera starts at the first key of `sequence`
+    /// (320×240, field of view `fov` degrees across the smaller side).
+    fn from_sequence(name: &'static str, mesh: Mesh, materials: Vec<Material>, lights: Vec<LightSpec>, sequence: SequenceSpec, fov: f32) -> Builtin {
+        let c0 = &sequence.camera[0];
+        let camera = camera(c0.origin, c0.target, fov, [320, 240]);
+        Builtin { name, mesh, materials, lights, camera, sequence, two_sided: true }
+    }
+}
+
 /// Builds the built-in scene `name`.
 pub fn build(name: &str) -> Result<Builtin> {
     Ok(match name {
@@ -83,43 +93,34 @@ fn walk(points: &[Vec3], duration: f32, look_height: f32) -> SequenceSpec {
     SequenceSpec { fps: 30.0, duration, camera, lights: Vec::new() }
 }
 
-/// A wall in the plane `x = x` from `z0` to `z1` (z0 < z1), height `h` from y = 0,
-/// with door openings `(z_center, width, height)`.
-fn wall_x(mesh: &mut Mesh, x: f32, z0: f32, z1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
-    let mut z = z0;
+/// A vertical wall of height `h` from y = 0, spanning `u0..u1` along the axis
+/// that `at(u, y)` maps to 3D, with door openings `(u_center, width, height)`.
+fn wall(mesh: &mut Mesh, at: impl Fn(f32, f32) -> Vec3, u0: f32, u1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
     let mut ds: Vec<_> = doors.to_vec();
     ds.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let q = |mesh: &mut Mesh, za: f32, zb: f32, ya: f32, yb: f32| {
-        if zb > za && yb > ya {
-            mesh.push_quad(Vec3::new(x, ya, za), Vec3::new(x, ya, zb), Vec3::new(x, yb, zb), Vec3::new(x, yb, za), m);
+    let mut q = |ua: f32, ub: f32, ya: f32, yb: f32| {
+        if ub > ua && yb > ya {
+            mesh.push_quad(at(ua, ya), at(ub, ya), at(ub, yb), at(ua, yb), m);
         }
     };
-    for (zc, w, dh) in ds {
-        let (a, b) = (zc - 0.5 * w, zc + 0.5 * w);
-        q(mesh, z, a, 0.0, h);
-        q(mesh, a, b, dh, h);
-        z = b;
+    let mut u = u0;
+    for (uc, w, dh) in ds {
+        let (a, b) = (uc - 0.5 * w, uc + 0.5 * w);
+        q(u, a, 0.0, h);
+        q(a, b, dh, h);
+        u = b;
     }
-    q(mesh, z, z1, 0.0, h);
+    q(u, u1, 0.0, h);
 }
 
-/// A wall in the plane `z = z` from `x0` to `x1`, like [`wall_x`].
+/// A wall in the plane `x = x` from `z0` to `z1` (see [`wall`]).
+fn wall_x(mesh: &mut Mesh, x: f32, z0: f32, z1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
+    wall(mesh, |z, y| Vec3::new(x, y, z), z0, z1, h, doors, m);
+}
+
+/// A wall in the plane `z = z` from `x0` to `x1` (see [`wall`]).
 fn wall_z(mesh: &mut Mesh, z: f32, x0: f32, x1: f32, h: f32, doors: &[(f32, f32, f32)], m: u32) {
-    let mut x = x0;
-    let mut ds: Vec<_> = doors.to_vec();
-    ds.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let q = |mesh: &mut Mesh, xa: f32, xb: f32, ya: f32, yb: f32| {
-        if xb > xa && yb > ya {
-            mesh.push_quad(Vec3::new(xa, ya, z), Vec3::new(xa, yb, z), Vec3::new(xb, yb, z), Vec3::new(xb, ya, z), m);
-        }
-    };
-    for (xc, w, dh) in ds {
-        let (a, b) = (xc - 0.5 * w, xc + 0.5 * w);
-        q(mesh, x, a, 0.0, h);
-        q(mesh, a, b, dh, h);
-        x = b;
-    }
-    q(mesh, x, x1, 0.0, h);
+    wall(mesh, |x, y| Vec3::new(x, y, z), x0, x1, h, doors, m);
 }
 
 /// A horizontal rectangle at height `y` facing up (`up = true`) or down.

@@ -66,6 +66,5 @@ pub fn build() -> Builtin {
         camera: vec![key(0.0, -1.0, 0.0), key(10.0, -14.0, 0.0), key(18.0, -26.0, 0.5), key(21.0, -31.0, -3.0), key(25.0, -35.0, 3.0)],
         lights: Vec::new(),
     };
-    let c0 = &sequence.camera[0];
-    Builtin { name: "office", mesh, materials, lights: Vec::new(), camera: super::camera(c0.origin, c0.target, 70.0, [320, 240]), sequence, two_sided: true }
+    Builtin::from_sequence("office", mesh, materials, Vec::new(), sequence, 70.0)
 }

@@ -1,4 +1,4 @@
-//! Argument types of the `vpl` command line shared with `cargo xtask`.
+//! Argument types of the `vpl` command line, parsed from text.
 
 use std::str::FromStr;
 

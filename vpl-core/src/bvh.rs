@@ -36,13 +36,13 @@ impl PreparedTriangle {
         }
     }
 
-    /// Ray parameter of the hit in `[t_min, t_max]`, or infinity.
+    /// Ray parameter of the hit in `[0, t_max]`, or infinity.
     #[inline(always)]
-    fn intersect(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> f32 {
+    fn intersect(&self, o: Vec3A, d: Vec3A, t_max: f32) -> f32 {
         let oz = Vec3A::from(self.row2.truncate()).dot(o) + self.row2.w;
         let dz = Vec3A::from(self.row2.truncate()).dot(d);
         let t = -oz / dz;
-        if !(t >= t_min && t <= t_max) {
+        if !(t >= 0.0 && t <= t_max) {
             return f32::INFINITY;
         }
         let p = o + d * t;
@@ -80,14 +80,20 @@ impl Bvh {
         Bvh { cwbvh, tris, order }
     }
 
+    /// Origin, direction and the obvhs ray of `ray`.
+    #[inline(always)]
+    fn prepare(ray: &Ray) -> (Vec3A, Vec3A, obvhs::ray::Ray) {
+        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
+        (o, d, obvhs::ray::Ray::new(o, d, 0.0, ray.t_max))
+    }
+
     /// Closest hit: (scene triangle, t).
     #[inline]
     pub fn closest(&self, ray: &Ray) -> Option<(u32, f32)> {
-        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
-        let r = obvhs::ray::Ray::new(o, d, 0.0, ray.t_max);
+        let (o, d, r) = Self::prepare(ray);
         let mut hit = RayHit::none();
         let tris = &self.tris;
-        if !self.cwbvh.ray_traverse(r, &mut hit, |r, id| tris[id].intersect(o, d, 0.0, r.tmax)) {
+        if !self.cwbvh.ray_traverse(r, &mut hit, |r, id| tris[id].intersect(o, d, r.tmax)) {
             return None;
         }
         Some((self.order[hit.primitive_id as usize], hit.t))
@@ -96,9 +102,8 @@ impl Bvh {
     /// Early-exit occlusion test (obvhs's `ray_traverse_miss`).
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
-        let r = obvhs::ray::Ray::new(o, d, 0.0, ray.t_max);
+        let (o, d, r) = Self::prepare(ray);
         let tris = &self.tris;
-        !self.cwbvh.ray_traverse_miss(r, |_, id| tris[id].intersect(o, d, 0.0, ray.t_max))
+        !self.cwbvh.ray_traverse_miss(r, |_, id| tris[id].intersect(o, d, ray.t_max))
     }
 }

@@ -98,7 +98,7 @@ impl SceneSetup {
         let lights = lights_spec.iter().map(light_from_spec).collect::<Result<Vec<_>>>()?;
         let two_sided = file.geometry.two_sided.unwrap_or(two_sided_default);
         let scene = Scene::new(name, &mesh, materials, lights, two_sided).map_err(|e| match e {
-            // A missing material library is the likely reason for a dark OBJ: say so in the error.
+            // Say what loading noticed: a missing material library is the usual reason for a dark OBJ.
             CoreError::NoLights(n) if !warnings.is_empty() => CoreError::NoLights(format!("{n} ({})", warnings.join("; "))),
             e => e,
         })?;
@@ -308,7 +308,6 @@ impl builtin::Builtin {
         }
     }
 }
-
 
 #[cfg(test)]
 mod tests {

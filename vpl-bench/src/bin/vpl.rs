@@ -218,7 +218,10 @@ fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Sce
 }
 
 /// The path tracer that `--max-depth`, `--mode` and `--clamp` describe.
-fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> PathTracer {
+fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> Res<PathTracer> {
+    if max_depth == 0 {
+        return Err("--max-depth must be at least 1".into());
+    }
     let mut pt = PathTracer::new(
         max_depth,
         match mode {
@@ -230,7 +233,18 @@ fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> PathTracer {
     if let ClampArg::Value(v) = clamp {
         pt.clamp = Some(GeometryClamp::new(v));
     }
-    pt
+    Ok(pt)
+}
+
+/// Writes `text` atomically to `out`, or to standard output when there is none.
+fn emit(out: Option<&Path>, text: &str) -> Res<()> {
+    match out {
+        Some(p) => write_atomic(p, text.as_bytes()).map_err(|e| e.to_string()),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
 }
 
 fn run(cli: Cli) -> Res<()> {
@@ -242,9 +256,7 @@ fn run(cli: Cli) -> Res<()> {
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
             }
-            if max_depth == 0 {
-                return Err("--max-depth must be at least 1".into());
-            }
+            let pt = tracer(max_depth, mode, clamp)?;
             if !(exposure.is_finite() && exposure > 0.0) {
                 return Err("--exposure must be positive".into());
             }
@@ -254,7 +266,6 @@ fn run(cli: Cli) -> Res<()> {
             }
             let pool = pool(threads)?;
             let (sc, camera) = load_frame(&scene, frame, size)?;
-            let pt = tracer(max_depth, mode, clamp);
             let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
             bar.set_style(ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "));
             let start = Instant::now();
@@ -288,9 +299,7 @@ fn run(cli: Cli) -> Res<()> {
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
             }
-            if max_depth == 0 {
-                return Err("--max-depth must be at least 1".into());
-            }
+            let pt = tracer(max_depth, mode, clamp)?;
             if let Some(p) = &out {
                 check_writable(p)?;
             }
@@ -300,7 +309,6 @@ fn run(cli: Cli) -> Res<()> {
             if let Some(p) = pixels.iter().find(|p| p.0 >= w || p.1 >= h) {
                 return Err(format!("--pixel {},{} is outside the {w}x{h} image", p.0, p.1));
             }
-            let pt = tracer(max_depth, mode, clamp);
             let px: Vec<(u32, u32)> = pixels.iter().map(|p| (p.0, p.1)).collect();
             let ts = pool.install(|| track(&sc, &camera, &pt, &px, spp, seed, frame as u64));
             let mut csv = String::from("x,y,r,g,b,stderr_r,stderr_g,stderr_b,samples\n");
@@ -310,24 +318,11 @@ fn run(cli: Cli) -> Res<()> {
                     t.pixel.0, t.pixel.1, t.mean.x, t.mean.y, t.mean.z, t.stderr.x, t.stderr.y, t.stderr.z, t.samples
                 ));
             }
-            match out {
-                Some(p) => write_atomic(&p, csv.as_bytes()).map_err(|e| e.to_string()),
-                None => {
-                    print!("{csv}");
-                    Ok(())
-                }
-            }
+            emit(out.as_deref(), &csv)
         }
         Command::ExportScene { name, out } => {
             let setup = SceneSetup::load(&name).map_err(|e| e.to_string())?;
-            let text = setup.to_toml();
-            match out {
-                Some(p) => write_atomic(&p, text.as_bytes()).map_err(|e| e.to_string()),
-                None => {
-                    print!("{text}");
-                    Ok(())
-                }
-            }
+            emit(out.as_deref(), &setup.to_toml())
         }
         Command::BenchPt { spp, repeat, threads } => {
             if spp == 0 || repeat == 0 {

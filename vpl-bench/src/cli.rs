@@ -37,13 +37,26 @@ impl FromStr for PixelArg {
     }
 }
 
-/// `--clamp <value | off>`.
+/// `--clamp <value | auto | off>`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ClampArg {
     /// No clamping.
     Off,
+    /// The default rule G_max = I / A ([`vpl_core::GeometryClamp::for_budget`]).
+    Auto,
     /// Clamp the geometry term at this value (1/m²).
     Value(f32),
+}
+
+impl ClampArg {
+    /// The clamp for a budget of `vpls` VPLs in a scene of surface area `area`.
+    pub fn resolve(self, vpls: usize, area: f32) -> Option<vpl_core::GeometryClamp> {
+        match self {
+            ClampArg::Off => None,
+            ClampArg::Auto => Some(vpl_core::GeometryClamp::for_budget(vpls, area)),
+            ClampArg::Value(v) => Some(vpl_core::GeometryClamp::new(v)),
+        }
+    }
 }
 
 impl FromStr for ClampArg {
@@ -52,9 +65,12 @@ impl FromStr for ClampArg {
         if s == "off" {
             return Ok(ClampArg::Off);
         }
+        if s == "auto" {
+            return Ok(ClampArg::Auto);
+        }
         match s.parse::<f32>() {
             Ok(v) if v.is_finite() && v > 0.0 => Ok(ClampArg::Value(v)),
-            _ => Err(format!("clamp '{s}' must be a positive number or 'off'")),
+            _ => Err(format!("clamp '{s}' must be a positive number, 'auto' or 'off'")),
         }
     }
 }
@@ -70,6 +86,7 @@ mod tests {
         assert!("10".parse::<Size>().is_err());
         assert_eq!("off".parse::<ClampArg>().unwrap(), ClampArg::Off);
         assert_eq!("2.5".parse::<ClampArg>().unwrap(), ClampArg::Value(2.5));
+        assert_eq!("auto".parse::<ClampArg>().unwrap().resolve(100, 4.0).unwrap().g_max, 25.0);
         assert!("-1".parse::<ClampArg>().is_err());
         assert_eq!("3,4".parse::<PixelArg>().unwrap(), PixelArg(3, 4));
         assert!("3".parse::<PixelArg>().is_err());

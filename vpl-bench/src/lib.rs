@@ -19,4 +19,6 @@
 
 pub mod cli;
 pub mod compare;
+pub mod metrics;
+pub mod stages;
 pub mod validation;

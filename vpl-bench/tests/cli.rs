@@ -66,6 +66,12 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--mode", "sideways"], "sideways");
     fails(&d, &["--scene", "cornell", "--clamp", "-3"], "clamp");
     fails(&d, &["--scene", "cornell", "--threads", "0"], "threads");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc"], "not available");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "xyz"], "unknown sampler");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--shadowmap-res", "0"], "shadowmap-res");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--vpls", "0"], "vpls");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--visibility", "magic"], "magic");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--direct-samples", "0"], "direct-samples");
     // A missing MTL is named in a warning line before the error.
     let o = vpl().args(["render", "--scene", &nomtl, "--out"]).arg(d.join("x.exr")).output().unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.mtl"));
@@ -128,4 +134,23 @@ fn track_prints_csv_with_standard_errors() {
     let o = vpl().args(["track", "--scene", "cornell", "--pixel", "999,1"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("outside"));
+}
+
+#[test]
+fn vpl_method_renders_with_both_visibilities_and_shadings() {
+    let d = scratch("vplmethod");
+    for (vis, shading) in [("shadowmap", "interleaved"), ("raytrace", "exhaustive")] {
+        let out = d.join(format!("{vis}.exr"));
+        let o = vpl()
+            .args(["render", "--scene", "cornell", "--method", "vpl", "--vpls", "256", "--size", "32x32", "--visibility", vis, "--shading", shading, "--shadowmap-res", "32", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{vis}: {err}");
+        assert!(err.contains("VPLs stored") && err.contains("mean RGB"), "{err}");
+        let img = vpl_core::Image::read_exr(&out).unwrap();
+        assert!(img.mean()[0] > 0.05, "{vis}: {:?}", img.mean());
+        assert!(d.join(format!("{vis}.png")).exists());
+    }
 }

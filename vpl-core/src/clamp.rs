@@ -19,6 +19,20 @@ impl GeometryClamp {
         Self { g_max }
     }
 
+    /// The toolkit's default clamp for a budget of `vpls` VPLs in a scene of
+    /// total surface area `area` (m²): G_max = I / A.
+    ///
+    /// 1/√G_max = √(A / I) is the mean spacing of I points spread over the
+    /// scene's surfaces, so the rule clamps a VPL that faces a receiver from
+    /// closer than that spacing: the near field that I VPLs cannot resolve,
+    /// where one VPL would paint a bright splotch. It scales with the scene
+    /// (G has units 1/m²) and relaxes as I grows, so VPL rendering stays
+    /// consistent. For I = 2048 on `cornell` (A ≈ 24.5 m²) G_max ≈ 84 m⁻²,
+    /// a facing distance of 0.11 m, 5.5 % of the box's width.
+    pub fn for_budget(vpls: usize, area: f32) -> Self {
+        Self { g_max: vpls as f32 / area.max(f32::MIN_POSITIVE) }
+    }
+
     /// The clamped geometry term min(G, G_max).
     #[inline]
     pub fn clamp(&self, g: f32) -> f32 {

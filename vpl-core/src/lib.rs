@@ -3,8 +3,10 @@
 //! The ground every crate of the VPL toolkit stands on: rays and frames,
 //! seeded random streams, the scene (one triangle mesh, materials, lights,
 //! a CWBVH from `obvhs`), cameras, images with EXR and PNG I/O, the OBJ and
-//! TOML loaders, the built-in scenes and their animations, and the shared
-//! traits.
+//! TOML loaders, the built-in scenes and their animations, and what the VPL
+//! stages share: [`Vpl`] and [`VplSet`], the [`GBuffer`], the per-frame
+//! [`Frame`], light emission sampling, and the traits [`VplSampler`],
+//! [`VplVisibility`], [`IndirectShader`] and [`RadiosityEstimator`].
 //!
 //! ```
 //! use vpl_core::{SceneSetup, Purpose, stream};
@@ -24,11 +26,15 @@ pub mod bvh;
 pub mod camera;
 pub mod clamp;
 pub mod distribution;
+pub mod emission;
 pub mod error;
+pub mod frame;
+pub mod gbuffer;
 pub mod image;
 pub mod light;
 pub mod material;
 pub mod mesh;
+pub mod mode;
 pub mod obj;
 pub mod ray;
 pub mod rng;
@@ -39,15 +45,20 @@ pub mod sequence;
 pub mod setup;
 pub mod surface;
 pub mod traits;
+pub mod vpl;
 
 pub use camera::{Camera, FovAxis};
 pub use clamp::GeometryClamp;
+pub use emission::EmittedRay;
 pub use error::{CoreError, Result};
+pub use frame::Frame;
+pub use gbuffer::{GBuffer, GSample, Receivers};
 pub use glam;
 pub use image::Image;
 pub use light::{Light, LightSample};
 pub use material::{Layered, Material};
 pub use mesh::{Mesh, TriangleDesc};
+pub use mode::Mode;
 pub use ray::{LocalFrame, Ray};
 pub use rng::{stream, Purpose, RngStream};
 pub use scene::Scene;
@@ -55,4 +66,5 @@ pub use scene_file::SceneFile;
 pub use sequence::Sequence;
 pub use setup::SceneSetup;
 pub use surface::{Hit, SurfacePoint};
-pub use traits::RadiosityEstimator;
+pub use traits::{IndirectShader, RadiosityEstimator, VisibilityUpdate, VplSampler, VplVisibility};
+pub use vpl::{Vpl, VplSet};

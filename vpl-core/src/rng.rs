@@ -25,6 +25,12 @@ impl Purpose {
     pub const SCENE: Purpose = Purpose(5);
     /// Tests and benchmarks.
     pub const TEST: Purpose = Purpose(6);
+    /// Scrambles of low-discrepancy sequences (index = dimension).
+    pub const SCRAMBLE: Purpose = Purpose(7);
+    /// Assignment of VPL slots to interleaved-shading subsets (index 0).
+    pub const INTERLEAVE: Purpose = Purpose(8);
+    /// Light samples of deterministic direct lighting (index = pixel index).
+    pub const DIRECT: Purpose = Purpose(9);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

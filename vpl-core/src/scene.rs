@@ -204,6 +204,11 @@ impl Scene {
         0.5 * (hi - lo).length()
     }
 
+    /// Total area of the scene's triangles (m²).
+    pub fn surface_area(&self) -> f32 {
+        self.geometry.triangles.iter().map(|t| t.area as f64).sum::<f64>() as f32
+    }
+
     /// Counts for reports.
     pub fn stats(&self) -> SceneStats {
         SceneStats { triangles: self.geometry.triangles.len(), degenerate: self.geometry.degenerate, lights: self.lights.len() }

@@ -1,7 +1,14 @@
-//! Interfaces shared by the stages of the toolkit.
+//! Interfaces shared by the stages of the toolkit: samplers produce a
+//! [`VplSet`], visibility answers V(x, y) for its slots, shaders turn the set
+//! into indirect light, and radiosity estimators give L(y) to the samplers
+//! that need it.
 
+use crate::frame::Frame;
+use crate::gbuffer::{GBuffer, Receivers};
+use crate::image::Image;
 use crate::scene::Scene;
 use crate::surface::SurfacePoint;
+use crate::vpl::VplSet;
 use glam::Vec3;
 
 /// Estimates the exitant radiance L(y) of a diffuse surface point (its radiosity
@@ -12,4 +19,60 @@ use glam::Vec3;
 pub trait RadiosityEstimator {
     /// Exitant radiance of `y` toward its front side (normal `y.n`), emission excluded.
     fn radiosity(&self, scene: &Scene, y: &SurfacePoint, seed: u64) -> Vec3;
+}
+
+/// A VPL sampler (Instant Radiosity, Russian-roulette acceptance,
+/// Metropolis IR, TCAS, SMC): produces each frame's VPLs in the flux
+/// convention of [`crate::vpl`]. Samplers are stateful and may keep VPLs from
+/// frame to frame; unchanged slots are what makes visibility updates cheap.
+pub trait VplSampler: Send {
+    /// Short name (`ir`, `smc`, …).
+    fn name(&self) -> &'static str;
+    /// Samples the VPLs of `frame`; slots that differ from the previous
+    /// frame are marked changed.
+    fn next_frame(&mut self, frame: &Frame) -> &VplSet;
+    /// One line of statistics about the last frame (stored VPLs, paths, …).
+    fn report(&self) -> String;
+}
+
+/// What a visibility update did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VisibilityUpdate {
+    /// Per-VPL structures (shadow maps) rebuilt.
+    pub rebuilt: usize,
+    /// Memory held after the update, in bytes.
+    pub memory_bytes: usize,
+}
+
+/// Visibility V(x, y) between receivers and the VPLs of a set, by slot.
+pub trait VplVisibility: Send + Sync {
+    /// Short name (`raytrace`, `shadowmap`).
+    fn name(&self) -> &'static str;
+    /// Brings the structure up to date with `vpls`, rebuilding only what the
+    /// slots that changed (or that were never built) need.
+    fn update(&mut self, scene: &Scene, vpls: &VplSet) -> VisibilityUpdate;
+    /// Visibility in [0, 1] between the VPL in `slot` and the surface point
+    /// `x` with normal `n_x` (the normal lets the receiver step off its surface).
+    fn visible(&self, slot: usize, x: Vec3, n_x: Vec3) -> f32;
+    /// Multiplies each positive weight `w[i]` by the visibility of receiver
+    /// `i` from the VPL in `slot`; zero weights are left alone (and need no
+    /// query). The batch form lets shaders stream one VPL over many points.
+    fn attenuate(&self, slot: usize, rx: &Receivers, w: &mut [f32]) {
+        for (i, wi) in w.iter_mut().enumerate() {
+            if *wi > 0.0 {
+                *wi *= self.visible(slot, rx.p(i), rx.n(i));
+            }
+        }
+    }
+    /// Memory held, in bytes.
+    fn memory_bytes(&self) -> usize;
+}
+
+/// Turns VPLs into the indirect radiance of every G-buffer pixel.
+pub trait IndirectShader: Send {
+    /// Short name (`interleaved`, `exhaustive`).
+    fn name(&self) -> &'static str;
+    /// Reflected radiance from `vpls` at each pixel of `gbuf` (zero where the
+    /// camera sees nothing that reflects).
+    fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image;
 }

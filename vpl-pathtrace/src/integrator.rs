@@ -1,40 +1,13 @@
 //! Unidirectional path tracing with next-event estimation and MIS.
 //!
-//! Depth follows Mitsuba 3: `max_depth` bounds the number of path *segments*,
-//! so a path has at most `max_depth − 1` scattering vertices; 5 means direct
-//! light plus three indirect bounces. Modes select paths by their number of
-//! scattering vertices k: `full` (any), `direct` (k ≤ 1: emitters seen
-//! directly and single scattering, Mitsuba's max_depth 2), `indirect` (k ≥ 2,
-//! exactly what VPL methods render, and `full − direct` path by path).
+//! Depth and modes follow [`vpl_core::Mode`] (Mitsuba 3's convention:
+//! `max_depth` counts path segments).
 
 use vpl_core::clamp::{geometry_term, GeometryClamp};
 use vpl_core::sampling::{cosine_hemisphere, power_heuristic};
-use vpl_core::{LocalFrame, Ray, RngStream, Scene, SurfacePoint};
+use vpl_core::{LocalFrame, Mode, Ray, RngStream, Scene, SurfacePoint};
 use vpl_core::glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
-
-/// Which paths an estimate includes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// All paths up to `max_depth`.
-    Full,
-    /// Emission seen directly and single scattering (k ≤ 1).
-    Direct,
-    /// Paths with at least two scattering vertices (k ≥ 2).
-    Indirect,
-}
-
-impl std::str::FromStr for Mode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "full" => Ok(Mode::Full),
-            "direct" => Ok(Mode::Direct),
-            "indirect" => Ok(Mode::Indirect),
-            _ => Err(format!("unknown mode '{s}' (full, direct, indirect)")),
-        }
-    }
-}
 
 /// A path tracer configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,12 +32,7 @@ impl PathTracer {
     /// Range of scattering-vertex counts k included by the mode.
     #[inline]
     fn k_range(&self) -> (u32, u32) {
-        let max_k = self.max_depth.saturating_sub(1);
-        match self.mode {
-            Mode::Full => (0, max_k),
-            Mode::Direct => (0, max_k.min(1)),
-            Mode::Indirect => (2, max_k),
-        }
+        self.mode.k_range(self.max_depth)
     }
 
     /// Radiance arriving along the camera ray `ray`.

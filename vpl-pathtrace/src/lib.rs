@@ -27,6 +27,7 @@ pub mod integrator;
 pub mod radiosity;
 pub mod render;
 
-pub use integrator::{Mode, PathTracer};
+pub use integrator::PathTracer;
+pub use vpl_core::Mode;
 pub use radiosity::PathRadiosity;
 pub use render::{pixel, render, track, Accumulator, RenderError, RenderOutput, RenderSettings, TrackedPixel};

@@ -1,7 +1,8 @@
 //! The path tracer as a [`RadiosityEstimator`]: exitant radiance of a diffuse
 //! point from N next-event-estimation paths, seeded by the caller.
 
-use crate::integrator::{Mode, PathTracer};
+use crate::integrator::PathTracer;
+use vpl_core::Mode;
 use vpl_core::glam::Vec3;
 use vpl_core::{stream, Purpose, RadiosityEstimator, Scene, SurfacePoint};
 

@@ -6,6 +6,7 @@
 //!   Mitsuba 3 (`results/validation/`), and `results/README.md`.
 //! - `cargo xtask test`: the whole test suite, as CI runs it.
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
+//! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and `office`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -30,7 +31,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation] | test | bench-pt [--spp N]>"
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
 }
 
 fn main() -> ExitCode {
@@ -39,6 +40,7 @@ fn main() -> ExitCode {
         Some("reproduce") => reproduce(&args[1..]),
         Some("test") => test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
+        Some("bench-vpl") => bench_vpl(&args[1..]),
         _ => Err(usage().to_string()),
     };
     match result {
@@ -69,6 +71,13 @@ fn bench_pt(args: &[String]) -> Result<(), String> {
     let mut c = Command::new(vpl);
     c.arg("bench-pt").args(args);
     run(c, "vpl bench-pt")
+}
+
+fn bench_vpl(args: &[String]) -> Result<(), String> {
+    let vpl = build_vpl()?;
+    let mut c = Command::new(vpl);
+    c.arg("bench-vpl").args(args);
+    run(c, "vpl bench-vpl")
 }
 
 struct Profile {

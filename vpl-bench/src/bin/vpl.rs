@@ -9,8 +9,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use vpl_bench::cli::{ClampArg, PixelArg, Size};
 use vpl_core::image::{preview_path, write_atomic};
-use vpl_core::{GeometryClamp, SceneSetup};
-use vpl_pathtrace::{render, track, Mode, PathTracer, RenderSettings};
+use vpl_core::{IndirectShader, Mode, SceneSetup, VplVisibility};
+use vpl_pathtrace::{render, track, PathTracer, RenderSettings};
 
 #[derive(Parser)]
 #[command(name = "vpl", version, about = "Virtual-point-light global illumination toolkit")]
@@ -48,9 +48,14 @@ struct SceneArgs {
     /// Longest path in segments (Mitsuba 3's convention: 5 = direct + 3 indirect bounces).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
-    /// Geometry-term clamp of the segment leaving the primary hit (§5.4 of the SMC paper), or off.
-    #[arg(long, default_value = "off", allow_hyphen_values = true)]
-    clamp: ClampArg,
+    /// Geometry-term clamp: a value in 1/m², `auto` (G_max = I / scene area, with I from --vpls) or `off`.
+    /// Default: off for --method path, auto for --method vpl. The path tracer clamps the segment
+    /// leaving the primary hit (§5.4 of the SMC paper), VPL shading the VPL-to-pixel segment.
+    #[arg(long, allow_hyphen_values = true)]
+    clamp: Option<ClampArg>,
+    /// VPL budget I (--method vpl; also sets the `auto` clamp).
+    #[arg(long, default_value_t = 2048)]
+    vpls: usize,
     /// Image size WxH (default: the scene camera's).
     #[arg(long)]
     size: Option<Size>,
@@ -60,6 +65,54 @@ struct SceneArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum VisibilityArg {
+    /// Exact BVH shadow rays.
+    Raytrace,
+    /// Paraboloid shadow maps.
+    Shadowmap,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ShadingArg {
+    /// 4×4 interleaved VPL subsets and a cross-bilateral filter.
+    Interleaved,
+    /// Every VPL at every pixel.
+    Exhaustive,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum PathSamplingArg {
+    Random,
+    Halton,
+}
+
+/// Settings of `--method vpl`.
+#[derive(clap::Args)]
+struct VplArgs {
+    /// VPL sampler (ir; rr, mir, mir-resample, tcas, smc are planned).
+    #[arg(long, default_value = "ir")]
+    sampler: String,
+    /// How light paths draw their numbers.
+    #[arg(long, value_enum, default_value_t = PathSamplingArg::Random)]
+    path_sampling: PathSamplingArg,
+    /// VPL-to-pixel visibility.
+    #[arg(long, value_enum, default_value_t = VisibilityArg::Shadowmap)]
+    visibility: VisibilityArg,
+    /// Shadow-map side in texels.
+    #[arg(long, default_value_t = vpl_visibility::DEFAULT_RESOLUTION)]
+    shadowmap_res: u32,
+    /// Indirect shading.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Interleaved)]
+    shading: ShadingArg,
+    /// Leave interleaved shading unfiltered.
+    #[arg(long)]
+    no_filter: bool,
+    /// Light samples per pixel for direct light.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
 }
 
 #[derive(Subcommand)]
@@ -77,6 +130,8 @@ enum Command {
         /// Samples per pixel (path).
         #[arg(long, default_value_t = 64)]
         spp: u32,
+        #[command(flatten)]
+        v: VplArgs,
         /// Output EXR; a PNG preview is written beside it.
         #[arg(long, default_value = "render.exr")]
         out: PathBuf,
@@ -126,6 +181,21 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+    },
+    /// Milliseconds per VPL stage at 640×360 with 2048 IR VPLs on `cornell` and `office`.
+    BenchVpl {
+        /// Timed repetitions of each stage (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        repeat: u32,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Image size.
+        #[arg(long, default_value = "640x360")]
+        size: Size,
+        /// VPL budget.
+        #[arg(long, default_value_t = 2048)]
+        vpls: usize,
     },
     /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
     ValidateCornell {
@@ -217,23 +287,30 @@ fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Sce
     Ok((sc, camera))
 }
 
-/// The path tracer that `--max-depth`, `--mode` and `--clamp` describe.
-fn tracer(max_depth: u32, mode: ModeArg, clamp: ClampArg) -> Res<PathTracer> {
+fn mode_of(mode: ModeArg) -> Mode {
+    match mode {
+        ModeArg::Full => Mode::Full,
+        ModeArg::Direct => Mode::Direct,
+        ModeArg::Indirect => Mode::Indirect,
+    }
+}
+
+/// Checks `--max-depth` and `--vpls`.
+fn check_depth(max_depth: u32, vpls: usize) -> Res<()> {
     if max_depth == 0 {
         return Err("--max-depth must be at least 1".into());
     }
-    let mut pt = PathTracer::new(
-        max_depth,
-        match mode {
-            ModeArg::Full => Mode::Full,
-            ModeArg::Direct => Mode::Direct,
-            ModeArg::Indirect => Mode::Indirect,
-        },
-    );
-    if let ClampArg::Value(v) = clamp {
-        pt.clamp = Some(GeometryClamp::new(v));
+    if vpls == 0 {
+        return Err("--vpls must be at least 1".into());
     }
-    Ok(pt)
+    Ok(())
+}
+
+/// The path tracer that `--max-depth`, `--mode` and `--clamp` describe (off by default).
+fn tracer(max_depth: u32, mode: ModeArg, clamp: Option<ClampArg>, vpls: usize, scene: &vpl_core::Scene) -> PathTracer {
+    let mut pt = PathTracer::new(max_depth, mode_of(mode));
+    pt.clamp = clamp.unwrap_or(ClampArg::Off).resolve(vpls, scene.surface_area());
+    pt
 }
 
 /// Writes `text` atomically to `out`, or to standard output when there is none.
@@ -249,14 +326,14 @@ fn emit(out: Option<&Path>, text: &str) -> Res<()> {
 
 fn run(cli: Cli) -> Res<()> {
     match cli.command {
-        Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, size, seed, threads }, method, mode, spp, out, stderr, exposure, quiet } => {
-            if method != Method::Path {
-                return Err(format!("--method {} is not available yet: this build renders with --method path", format!("{method:?}").to_lowercase()));
+        Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, method, mode, spp, v, out, stderr, exposure, quiet } => {
+            if method == Method::Progressive {
+                return Err("--method progressive is not available yet: this build renders with --method path or vpl".into());
             }
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
             }
-            let pt = tracer(max_depth, mode, clamp)?;
+            check_depth(max_depth, vpls)?;
             if !(exposure.is_finite() && exposure > 0.0) {
                 return Err("--exposure must be positive".into());
             }
@@ -265,7 +342,14 @@ fn run(cli: Cli) -> Res<()> {
                 check_writable(s)?;
             }
             let pool = pool(threads)?;
+            if method == Method::Vpl {
+                if stderr.is_some() {
+                    return Err("--stderr is for --method path: one VPL render has no per-pixel error estimate".into());
+                }
+                return render_vpl(&scene, frame, size, seed, max_depth, mode, clamp, vpls, &v, &out, exposure, quiet, &pool);
+            }
             let (sc, camera) = load_frame(&scene, frame, size)?;
+            let pt = tracer(max_depth, mode, clamp, vpls, &sc);
             let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
             bar.set_style(ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "));
             let start = Instant::now();
@@ -295,16 +379,17 @@ fn run(cli: Cli) -> Res<()> {
             }
             Ok(())
         }
-        Command::Track { s: SceneArgs { scene, frame, max_depth, clamp, size, seed, threads }, mode, pixels, spp, out } => {
+        Command::Track { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, mode, pixels, spp, out } => {
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
             }
-            let pt = tracer(max_depth, mode, clamp)?;
+            check_depth(max_depth, vpls)?;
             if let Some(p) = &out {
                 check_writable(p)?;
             }
             let pool = pool(threads)?;
             let (sc, camera) = load_frame(&scene, frame, size)?;
+            let pt = tracer(max_depth, mode, clamp, vpls, &sc);
             let (w, h) = camera.resolution;
             if let Some(p) = pixels.iter().find(|p| p.0 >= w || p.1 >= h) {
                 return Err(format!("--pixel {},{} is outside the {w}x{h} image", p.0, p.1));
@@ -350,6 +435,23 @@ fn run(cli: Cli) -> Res<()> {
             );
             Ok(())
         }
+        Command::BenchVpl { repeat, threads, size, vpls } => {
+            if repeat == 0 || vpls == 0 {
+                return Err("--repeat and --vpls must be at least 1".into());
+            }
+            let pool = pool(threads)?;
+            println!("bench-vpl: {}x{}, {vpls} IR VPLs, 128x128 shadow maps, {} threads, median of {repeat} (ms)", size.0, size.1, pool.current_num_threads());
+            println!("| scene | G-buffer | direct (16 spp) | IR sampling | shadow maps, all | shadow maps, 16 changed | interleaved gather | filter | indirect frame, 16 changed |");
+            println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+            for name in ["cornell", "office"] {
+                let b = pool.install(|| vpl_bench::stages::bench_stages(name, (size.0, size.1), vpls, repeat)).map_err(|e| e.to_string())?;
+                println!(
+                    "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | **{:.1}** |",
+                    b.gbuffer, b.direct, b.sampling, b.shadow_maps_all, b.shadow_maps_16, b.gather, b.filter, b.indirect_frame
+                );
+            }
+            Ok(())
+        }
         Command::ValidateCornell { spp, data, out, seed } => {
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
@@ -375,4 +477,94 @@ fn run(cli: Cli) -> Res<()> {
             Ok(())
         }
     }
+}
+
+/// `vpl render --method vpl`.
+#[allow(clippy::too_many_arguments)]
+fn render_vpl(
+    scene: &str,
+    frame: u32,
+    size: Option<Size>,
+    seed: u64,
+    max_depth: u32,
+    mode: ModeArg,
+    clamp: Option<ClampArg>,
+    vpls: usize,
+    v: &VplArgs,
+    out: &Path,
+    exposure: f32,
+    quiet: bool,
+    pool: &rayon::ThreadPool,
+) -> Res<()> {
+    if v.direct_samples == 0 {
+        return Err("--direct-samples must be at least 1".into());
+    }
+    let config = vpl_sampling::SamplerConfig {
+        vpls,
+        max_depth,
+        sampling: match v.path_sampling {
+            PathSamplingArg::Random => vpl_sampling::PathSampling::Random,
+            PathSamplingArg::Halton => vpl_sampling::PathSampling::Halton,
+        },
+    };
+    let mut sampler = vpl_sampling::build(&v.sampler, &config).map_err(|e| e.to_string())?;
+    let mut vis: Box<dyn VplVisibility> = match v.visibility {
+        VisibilityArg::Raytrace => Box::new(vpl_visibility::RayTraced::default()),
+        VisibilityArg::Shadowmap => Box::new(vpl_visibility::ShadowMaps::new(v.shadowmap_res).map_err(|e| format!("--shadowmap-res: {e}"))?),
+    };
+    let (sc, camera) = load_frame(scene, frame, size)?;
+    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
+    let mut shader: Box<dyn IndirectShader> = match v.shading {
+        ShadingArg::Exhaustive => Box::new(vpl_shading::ExhaustiveShader { clamp }),
+        ShadingArg::Interleaved => {
+            let mut s = vpl_shading::InterleavedShader::new(clamp, seed);
+            if v.no_filter {
+                s.filter = None;
+            }
+            Box::new(s)
+        }
+    };
+    let settings = vpl_shading::FrameSettings {
+        mode: mode_of(mode),
+        max_depth,
+        direct_samples: v.direct_samples,
+        seed,
+        index: frame as u64,
+        time: frame as f32 / 30.0,
+    };
+    let r = pool.install(|| vpl_shading::render_frame(&sc, &camera, settings, sampler.as_mut(), vis.as_mut(), shader.as_mut()));
+    r.image.write_exr(out).map_err(|e| e.to_string())?;
+    r.image.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    if !quiet {
+        let t = r.timings;
+        let m = r.image.mean();
+        if !r.sampler_report.is_empty() {
+            eprintln!("vpl: {}", r.sampler_report);
+            eprintln!(
+                "vpl: visibility {}: {} maps rebuilt, {:.1} MiB; clamp {}",
+                vis.name(),
+                r.visibility.rebuilt,
+                r.visibility.memory_bytes as f64 / (1 << 20) as f64,
+                clamp.map_or("off".to_string(), |c| format!("G_max = {:.3} 1/m^2", c.g_max))
+            );
+        }
+        eprintln!(
+            "vpl: {} {}x{} in {:.1} ms (G-buffer {:.1}, sampling {:.1}, visibility {:.1}, {} shading {:.1}, direct {:.1}), mean RGB {:.5} {:.5} {:.5} -> {}",
+            sc.name,
+            camera.resolution.0,
+            camera.resolution.1,
+            t.total_ms,
+            t.gbuffer_ms,
+            t.sampling_ms,
+            t.visibility_ms,
+            shader.name(),
+            t.shading_ms,
+            t.direct_ms,
+            m[0],
+            m[1],
+            m[2],
+            out.display()
+        );
+    }
+    Ok(())
 }

@@ -1,0 +1,74 @@
+//! Image error metrics: relative MSE, RMSE, box downsampling.
+
+use vpl_core::glam::Vec3;
+use vpl_core::{CoreError, Image};
+
+/// Offset ε in the denominator of [`rel_mse`]: keeps near-black pixels from
+/// dominating (the convention of Rousselle et al. and most denoising papers).
+pub const REL_MSE_EPSILON: f64 = 1e-2;
+
+fn same_size(a: &Image, b: &Image) -> Result<(), CoreError> {
+    if a.width != b.width || a.height != b.height {
+        return Err(CoreError::Invalid(format!("images differ in size: {}x{} and {}x{}", a.width, a.height, b.width, b.height)));
+    }
+    Ok(())
+}
+
+/// Relative mean squared error of `a` against the reference `b`:
+/// the mean over pixels and channels of (a − b)² / (b² + ε), ε = [`REL_MSE_EPSILON`].
+pub fn rel_mse(a: &Image, b: &Image) -> Result<f64, CoreError> {
+    same_size(a, b)?;
+    let mut s = 0.0f64;
+    for (p, q) in a.data.iter().zip(&b.data) {
+        for c in 0..3 {
+            let (x, y) = (p[c] as f64, q[c] as f64);
+            s += (x - y).powi(2) / (y * y + REL_MSE_EPSILON);
+        }
+    }
+    Ok(s / (3 * a.data.len().max(1)) as f64)
+}
+
+/// Root mean squared error over pixels and channels.
+pub fn rmse(a: &Image, b: &Image) -> Result<f64, CoreError> {
+    same_size(a, b)?;
+    let s: f64 = a.data.iter().zip(&b.data).map(|(p, q)| (*p - *q).length_squared() as f64).sum();
+    Ok((s / (3 * a.data.len().max(1)) as f64).sqrt())
+}
+
+/// Box-filters `img` down by an integer `factor` on both axes.
+pub fn downsample(img: &Image, factor: u32) -> Result<Image, CoreError> {
+    if factor == 0 || img.width % factor != 0 || img.height % factor != 0 {
+        return Err(CoreError::Invalid(format!("{}x{} cannot be downsampled by {factor}", img.width, img.height)));
+    }
+    let mut out = Image::new(img.width / factor, img.height / factor);
+    let norm = 1.0 / (factor * factor) as f32;
+    for y in 0..out.height {
+        for x in 0..out.width {
+            let mut s = Vec3::ZERO;
+            for dy in 0..factor {
+                for dx in 0..factor {
+                    s += img.get(x * factor + dx, y * factor + dy);
+                }
+            }
+            out.set(x, y, s * norm);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_on_small_images() {
+        let a = Image { width: 2, height: 2, data: vec![Vec3::ONE, Vec3::ZERO, Vec3::ONE, Vec3::ZERO] };
+        let d = downsample(&a, 2).unwrap();
+        assert_eq!(d.data, vec![Vec3::splat(0.5)]);
+        assert_eq!(rel_mse(&a, &a).unwrap(), 0.0);
+        let b = Image { data: vec![Vec3::splat(2.0); 4], ..a.clone() };
+        assert!((rmse(&b, &Image { data: vec![Vec3::ONE; 4], ..a.clone() }).unwrap() - 1.0).abs() < 1e-9);
+        assert!(downsample(&a, 3).is_err());
+        assert!(rel_mse(&a, &d).is_err());
+    }
+}

@@ -1,0 +1,87 @@
+//! Timing the stages of a VPL frame (`vpl bench-vpl`, `cargo xtask bench-vpl`).
+
+use std::time::Instant;
+use vpl_core::{CoreError, GeometryClamp, IndirectShader, SceneSetup, Vpl, VplVisibility};
+use vpl_sampling::{InstantRadiosity, IrConfig};
+use vpl_shading::{direct_light, render_gbuffer, InterleavedShader};
+use vpl_visibility::ShadowMaps;
+
+/// Median milliseconds per stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageBench {
+    /// Camera rays into the G-buffer.
+    pub gbuffer: f64,
+    /// Direct light, 16 light samples per pixel.
+    pub direct: f64,
+    /// Instant Radiosity light paths.
+    pub sampling: f64,
+    /// Shadow maps of all VPLs, from scratch.
+    pub shadow_maps_all: f64,
+    /// Shadow maps after 16 VPLs moved.
+    pub shadow_maps_16: f64,
+    /// Interleaved gathering (VPL-major, shadow-map visibility).
+    pub gather: f64,
+    /// Cross-bilateral filter.
+    pub filter: f64,
+    /// G-buffer + 16 shadow maps + gather + filter: an indirect frame in
+    /// which 16 VPLs changed (what a temporally coherent sampler pays).
+    pub indirect_frame: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn time<T>(repeat: u32, mut f: impl FnMut() -> T) -> f64 {
+    median(
+        (0..repeat)
+            .map(|_| {
+                let t = Instant::now();
+                std::hint::black_box(f());
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect(),
+    )
+}
+
+/// Times each stage on built-in scene `name` at `size` with `vpls` IR VPLs.
+pub fn bench_stages(name: &str, size: (u32, u32), vpls: usize, repeat: u32) -> Result<StageBench, CoreError> {
+    let setup = SceneSetup::load(name)?;
+    let scene = &setup.scene;
+    let camera = setup.camera.with_resolution(size)?;
+    let mut b = StageBench { gbuffer: time(repeat, || render_gbuffer(scene, &camera)), ..StageBench::default() };
+    let gbuf = render_gbuffer(scene, &camera);
+    b.direct = time(repeat, || direct_light(scene, &gbuf, 16, 0));
+    let mut ir = InstantRadiosity::new(IrConfig { vpls, ..IrConfig::default() }).map_err(|e| CoreError::Invalid(e.to_string()))?;
+    b.sampling = time(repeat, || ir.sample(scene, 0).stored());
+    let mut set = ir.sample(scene, 0).clone();
+    b.shadow_maps_all = time(repeat.min(3), || {
+        let mut sm = ShadowMaps::new(128).expect("valid resolution");
+        sm.update(scene, &set).rebuilt
+    });
+    let mut sm = ShadowMaps::new(128).expect("valid resolution");
+    sm.update(scene, &set);
+    let movable: Vec<(usize, Vpl)> = set.iter().map(|(s, v)| (s, *v)).step_by(7).take(16).collect();
+    let mut round = 0u32;
+    b.shadow_maps_16 = time(repeat, || {
+        round += 1;
+        set.begin_frame();
+        for (s, v) in &movable {
+            set.set(*s, Some(Vpl { y: v.y + v.n * (1e-3 * round as f32), ..*v }));
+        }
+        sm.update(scene, &set).rebuilt
+    });
+    let mut shader = InterleavedShader::new(Some(GeometryClamp::for_budget(vpls, scene.surface_area())), 0);
+    let mut gathers = Vec::new();
+    let mut filters = Vec::new();
+    for _ in 0..repeat {
+        std::hint::black_box(shader.shade(&gbuf, &set, &sm));
+        gathers.push(shader.timings().gather_ms);
+        filters.push(shader.timings().filter_ms);
+    }
+    b.gather = median(gathers);
+    b.filter = median(filters);
+    b.indirect_frame = b.gbuffer + b.shadow_maps_16 + b.gather + b.filter;
+    Ok(b)
+}

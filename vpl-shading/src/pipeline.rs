@@ -1,0 +1,118 @@
+//! One frame of VPL rendering, stage by stage, timed.
+
+use crate::direct::direct_light;
+use crate::gbuffer::render_gbuffer;
+use std::time::Instant;
+use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, VisibilityUpdate, VplSampler, VplVisibility};
+
+/// What a frame renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSettings {
+    /// Which paths: `indirect` (VPLs only), `direct` (emission and direct
+    /// light), `full` (both).
+    pub mode: Mode,
+    /// Longest path in segments (Mitsuba's convention); the sampler must
+    /// have been built for the same depth.
+    pub max_depth: u32,
+    /// Light samples per pixel of the direct light.
+    pub direct_samples: u32,
+    /// Seed of all streams.
+    pub seed: u64,
+    /// Frame index.
+    pub index: u64,
+    /// Time in seconds.
+    pub time: f32,
+}
+
+impl Default for FrameSettings {
+    fn default() -> Self {
+        FrameSettings { mode: Mode::Full, max_depth: 5, direct_samples: 16, seed: 0, index: 0, time: 0.0 }
+    }
+}
+
+/// Milliseconds per stage of a frame (zero for stages the mode skips).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimings {
+    /// Camera rays into the G-buffer.
+    pub gbuffer_ms: f64,
+    /// The sampler's `next_frame`.
+    pub sampling_ms: f64,
+    /// Visibility update (shadow maps of changed VPLs).
+    pub visibility_ms: f64,
+    /// Indirect shading (filter included).
+    pub shading_ms: f64,
+    /// Direct light.
+    pub direct_ms: f64,
+    /// The whole frame.
+    pub total_ms: f64,
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct FrameOutput {
+    /// Radiance per pixel.
+    pub image: Image,
+    /// The G-buffer the frame used.
+    pub gbuffer: GBuffer,
+    /// Stage timings.
+    pub timings: StageTimings,
+    /// What the visibility update did.
+    pub visibility: VisibilityUpdate,
+    /// The sampler's report line ("" when the mode needs no VPLs).
+    pub sampler_report: String,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Renders one frame: the G-buffer; then, when the mode and depth keep paths
+/// with ≥ 2 scattering vertices, the sampler's VPLs, the visibility update
+/// and indirect shading; then directly seen emission (k = 0) and direct
+/// light (k = 1) where the mode keeps them.
+pub fn render_frame(
+    scene: &Scene,
+    camera: &Camera,
+    s: FrameSettings,
+    sampler: &mut dyn VplSampler,
+    vis: &mut dyn VplVisibility,
+    shader: &mut dyn IndirectShader,
+) -> FrameOutput {
+    let start = Instant::now();
+    let mut t = StageTimings::default();
+    let t0 = Instant::now();
+    let gbuffer = render_gbuffer(scene, camera);
+    t.gbuffer_ms = ms(t0);
+    let mut image = Image::new(camera.resolution.0, camera.resolution.1);
+    let mut visibility = VisibilityUpdate::default();
+    let mut sampler_report = String::new();
+    let (_, max_k) = s.mode.k_range(s.max_depth);
+    if s.mode != Mode::Direct && max_k >= 2 {
+        let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous: None };
+        let t0 = Instant::now();
+        let vpls = sampler.next_frame(&frame);
+        t.sampling_ms = ms(t0);
+        let t0 = Instant::now();
+        visibility = vis.update(scene, vpls);
+        t.visibility_ms = ms(t0);
+        let t0 = Instant::now();
+        image = shader.shade(&gbuffer, vpls, vis);
+        t.shading_ms = ms(t0);
+        sampler_report = sampler.report();
+    }
+    if s.mode.includes(0, s.max_depth) {
+        for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
+            *o += g.emitted;
+        }
+    }
+    if s.mode.includes(1, s.max_depth) {
+        let t0 = Instant::now();
+        let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
+        t.direct_ms = ms(t0);
+        for (o, d) in image.data.iter_mut().zip(&d.data) {
+            *o += *d;
+        }
+    }
+    t.total_ms = ms(start);
+    FrameOutput { image, gbuffer, timings: t, visibility, sampler_report }
+}

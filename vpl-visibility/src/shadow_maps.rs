@@ -1,0 +1,213 @@
+//! Paraboloid shadow maps, one per VPL, rebuilt lazily.
+
+use crate::paraboloid::paraboloid_to_direction;
+use rayon::prelude::*;
+use vpl_core::glam::{Vec2, Vec3};
+use vpl_core::{LocalFrame, Ray, Receivers, Scene, VisibilityUpdate, Vpl, VplSet, VplVisibility};
+
+/// The SMC paper's default map size (§4): 128×128 texels.
+pub const DEFAULT_RESOLUTION: u32 = 128;
+
+/// Largest accepted map side.
+pub const MAX_RESOLUTION: u32 = 4096;
+
+/// Errors of [`ShadowMaps::new`].
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum ShadowMapError {
+    /// The resolution is outside 1..=4096.
+    #[error("shadow-map resolution {0} is outside 1..={MAX_RESOLUTION}")]
+    Resolution(u32),
+}
+
+/// One VPL's depth map.
+#[derive(Clone, Debug)]
+struct Map {
+    /// The VPL position and normal the map was rendered for.
+    key: (Vec3, Vec3),
+    /// Ray origin: the VPL stepped off its surface.
+    origin: Vec3,
+    /// Frame whose +Z is the VPL normal.
+    frame: LocalFrame,
+    /// Distance to the first surface per texel, row-major; infinite where nothing is hit.
+    depth: Vec<f32>,
+}
+
+/// Hemispherical paraboloid shadow maps, one per VPL slot.
+///
+/// Texel (i, j) of a map stores the distance from the VPL to the first
+/// surface along the direction at paraboloid coordinates of its centre
+/// (a ray cast per texel: the CPU counterpart of rasterising the map). A
+/// receiver x is visible when |x − y| − b ≤ D, D the depth of the texel its
+/// direction falls in, and the bias
+///
+/// ```text
+/// b = 2ε + k · |x − y| · Δθ · (½ + min(tan φ, 10)),   Δθ = (2 / res) · (1 + cos θ)
+/// ```
+///
+/// where Δθ is the angle one texel spans at polar angle θ (du/dθ = 1/(1 + cos θ)
+/// for u = tan(θ/2)), φ the angle between the receiver normal and the
+/// direction to the VPL, ε the scene's ray offset and k = [`ShadowMaps::bias_scale`].
+/// The bias covers the receiver's own depth change across a texel, so it
+/// shrinks in proportion to 1/res (the SMC paper adjusts its bias with the
+/// resolution in the same way, §5.4).
+#[derive(Clone, Debug)]
+pub struct ShadowMaps {
+    res: u32,
+    maps: Vec<Option<Map>>,
+    eps: f32,
+    /// Scale k of the slope-dependent depth bias (default 1).
+    pub bias_scale: f32,
+}
+
+impl ShadowMaps {
+    /// Maps of `res × res` texels.
+    pub fn new(res: u32) -> Result<Self, ShadowMapError> {
+        if res == 0 || res > MAX_RESOLUTION {
+            return Err(ShadowMapError::Resolution(res));
+        }
+        Ok(ShadowMaps { res, maps: Vec::new(), eps: 0.0, bias_scale: 1.0 })
+    }
+
+    /// Texels per side.
+    pub fn resolution(&self) -> u32 {
+        self.res
+    }
+
+    /// Number of maps held.
+    pub fn maps(&self) -> usize {
+        self.maps.iter().filter(|m| m.is_some()).count()
+    }
+
+    /// Renders the map of `vpl` by casting one ray per texel.
+    fn render(scene: &Scene, vpl: &Vpl, res: u32) -> Map {
+        let eps = scene.epsilon();
+        let origin = vpl.y + vpl.n * eps;
+        let frame = LocalFrame::from_normal(vpl.n);
+        let mut depth = vec![0.0f32; (res * res) as usize];
+        let scale = 2.0 / res as f32;
+        depth.par_chunks_mut(res as usize).enumerate().for_each(|(j, row)| {
+            let v = (j as f32 + 0.5) * scale - 1.0;
+            for (i, d) in row.iter_mut().enumerate() {
+                let u = (i as f32 + 0.5) * scale - 1.0;
+                let dir = frame.to_world(paraboloid_to_direction(Vec2::new(u, v)));
+                *d = scene.intersect(&Ray::new(origin, dir)).map_or(f32::INFINITY, |h| h.t);
+            }
+        });
+        Map { key: (vpl.y, vpl.n), origin, frame, depth }
+    }
+
+    #[inline]
+    fn lookup(&self, m: &Map, x: Vec3, n_x: Vec3) -> f32 {
+        let d = x - m.origin;
+        let dist2 = d.length_squared();
+        if dist2 <= 0.0 {
+            return 1.0;
+        }
+        let inv = dist2.sqrt().recip();
+        let dist = dist2 * inv;
+        let lz = d.dot(m.frame.n) * inv;
+        if lz <= 0.0 {
+            return 0.0;
+        }
+        let (lx, ly) = (d.dot(m.frame.s) * inv, d.dot(m.frame.t) * inv);
+        let k = 1.0 / (1.0 + lz);
+        let half = 0.5 * self.res as f32;
+        let max = (self.res - 1) as f32;
+        let i = ((lx * k + 1.0) * half).clamp(0.0, max) as usize;
+        let j = ((ly * k + 1.0) * half).clamp(0.0, max) as usize;
+        let depth = m.depth[j * self.res as usize + i];
+        // Bias: the receiver's depth change across one texel (see the type's docs).
+        let cos_r = (n_x.dot(d) * inv).abs();
+        let tan = ((1.0 - cos_r * cos_r).max(0.0).sqrt() / cos_r.max(0.1)).min(10.0);
+        let texel = dist * (2.0 / self.res as f32) * (1.0 + lz);
+        let bias = 2.0 * self.eps + self.bias_scale * texel * (0.5 + tan);
+        if dist - bias <= depth { 1.0 } else { 0.0 }
+    }
+}
+
+impl VplVisibility for ShadowMaps {
+    fn name(&self) -> &'static str {
+        "shadowmap"
+    }
+
+    /// Rebuilds the maps of slots whose VPL position or normal differs from
+    /// the one the map was rendered for (a VPL whose flux alone changed keeps
+    /// its map); drops the maps of emptied slots.
+    fn update(&mut self, scene: &Scene, vpls: &VplSet) -> VisibilityUpdate {
+        self.eps = scene.epsilon();
+        self.maps.resize(vpls.len(), None);
+        let stale: Vec<usize> = (0..vpls.len())
+            .filter(|&s| match (vpls.get(s), &self.maps[s]) {
+                (Some(v), Some(m)) => m.key != (v.y, v.n),
+                (Some(_), None) => true,
+                (None, _) => false,
+            })
+            .collect();
+        for s in 0..vpls.len() {
+            if vpls.get(s).is_none() {
+                self.maps[s] = None;
+            }
+        }
+        let res = self.res;
+        let fresh: Vec<(usize, Map)> = stale.par_iter().map(|&s| (s, Self::render(scene, vpls.get(s).expect("stale slots hold a VPL"), res))).collect();
+        for (s, m) in fresh {
+            self.maps[s] = Some(m);
+        }
+        VisibilityUpdate { rebuilt: stale.len(), memory_bytes: self.memory_bytes() }
+    }
+
+    #[inline]
+    fn visible(&self, slot: usize, x: Vec3, n_x: Vec3) -> f32 {
+        match self.maps.get(slot) {
+            Some(Some(m)) => self.lookup(m, x, n_x),
+            _ => 0.0,
+        }
+    }
+
+    fn attenuate(&self, slot: usize, rx: &Receivers, w: &mut [f32]) {
+        let Some(Some(m)) = self.maps.get(slot) else {
+            w.iter_mut().for_each(|x| *x = 0.0);
+            return;
+        };
+        for (i, wi) in w.iter_mut().enumerate() {
+            if *wi > 0.0 {
+                *wi *= self.lookup(m, rx.p(i), rx.n(i));
+            }
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.maps.iter().flatten().map(|m| m.depth.len() * 4 + std::mem::size_of::<Map>()).sum::<usize>()
+            + self.maps.len() * std::mem::size_of::<Option<Map>>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vpl_core::SceneSetup;
+
+    fn vpl(y: Vec3, n: Vec3) -> Vpl {
+        Vpl { y, n, flux: Vec3::ONE, id: 0, bounce: 1 }
+    }
+
+    #[test]
+    fn only_moved_vpls_rebuild_and_memory_is_counted() {
+        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let mut set = VplSet::new(3);
+        set.set(0, Some(vpl(Vec3::new(0.0, 0.99, 0.0), -Vec3::Y)));
+        set.set(1, Some(vpl(Vec3::new(0.5, -1.0, 0.5), Vec3::Y)));
+        let mut sm = ShadowMaps::new(32).unwrap();
+        let u = sm.update(&scene, &set);
+        assert_eq!(u.rebuilt, 2);
+        assert!(u.memory_bytes >= 2 * 32 * 32 * 4);
+        set.begin_frame();
+        // Flux alone: the map stays.
+        set.set(0, Some(Vpl { flux: Vec3::splat(2.0), ..vpl(Vec3::new(0.0, 0.99, 0.0), -Vec3::Y) }));
+        assert_eq!(sm.update(&scene, &set).rebuilt, 0);
+        set.set(1, None);
+        let u = sm.update(&scene, &set);
+        assert_eq!((u.rebuilt, sm.maps()), (0, 1));
+        assert!(ShadowMaps::new(0).is_err());
+    }
+}

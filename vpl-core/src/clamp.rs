@@ -27,8 +27,8 @@ impl GeometryClamp {
     /// closer than that spacing: the near field that I VPLs cannot resolve,
     /// where one VPL would paint a bright splotch. It scales with the scene
     /// (G has units 1/m²) and relaxes as I grows, so VPL rendering stays
-    /// consistent. For I = 2048 on `cornell` (A ≈ 24.5 m²) G_max ≈ 84 m⁻²,
-    /// a facing distance of 0.11 m, 5.5 % of the box's width.
+    /// consistent. For I = 2048 on `cornell` (A = 26.0 m²) G_max = 78.8 m⁻²,
+    /// a facing distance of 0.11 m, 5.6 % of the box's width.
     pub fn for_budget(vpls: usize, area: f32) -> Self {
         Self { g_max: vpls as f32 / area.max(f32::MIN_POSITIVE) }
     }

@@ -66,6 +66,9 @@ pub trait VplVisibility: Send + Sync {
     }
     /// Memory held, in bytes.
     fn memory_bytes(&self) -> usize;
+    /// The concrete type, for shaders with a fused fast path for a known
+    /// visibility (they must give the same result as [`VplVisibility::attenuate`]).
+    fn as_any(&self) -> &dyn std::any::Any;
 }
 
 /// Turns VPLs into the indirect radiance of every G-buffer pixel.

@@ -46,31 +46,42 @@ impl CrossBilateral {
     pub fn apply(&self, gbuf: &GBuffer, e: &Image) -> Image {
         let (w, h) = (gbuf.width as i32, gbuf.height as i32);
         let r = 2 * self.periods as i32;
+        // The guide, compact: position, normal, 1/2σ² (0 where nothing reflects).
+        let guide: Vec<(Vec3, Vec3, f32)> = gbuf
+            .samples
+            .iter()
+            .map(|g| {
+                if !g.reflects() {
+                    return (g.p, g.n, 0.0);
+                }
+                let view = (gbuf.eye - g.p).normalize_or_zero();
+                let footprint = g.depth * gbuf.pixel_angle / g.n.dot(view).abs().max(0.1);
+                (g.p, g.n, 1.0 / (2.0 * (self.sigma * footprint).powi(2)).max(f32::MIN_POSITIVE))
+            })
+            .collect();
         let mut out = Image::new(gbuf.width, gbuf.height);
         out.data.par_chunks_mut(w.max(1) as usize).enumerate().for_each(|(y, row)| {
             let y = y as i32;
             for (x, o) in row.iter_mut().enumerate() {
                 let x = x as i32;
-                let gp = &gbuf.samples[(y * w + x) as usize];
-                if !gp.reflects() {
+                let (pp, np, inv_2s2) = guide[(y * w + x) as usize];
+                if inv_2s2 == 0.0 {
                     continue;
                 }
-                let view = (gbuf.eye - gp.p).normalize_or_zero();
-                let footprint = gp.depth * gbuf.pixel_angle / gp.n.dot(view).abs().max(0.1);
-                let inv_2s2 = 1.0 / (2.0 * (self.sigma * footprint).powi(2)).max(f32::MIN_POSITIVE);
                 let mut sum = Vec3::ZERO;
                 let mut wsum = 0.0f32;
                 for qy in (y - r).max(0)..=(y + r).min(h - 1) {
                     let ty = if (qy - y).abs() == r { 0.5 } else { 1.0 };
+                    let base = (qy * w) as usize;
                     for qx in (x - r).max(0)..=(x + r).min(w - 1) {
-                        let i = (qy * w + qx) as usize;
-                        let gq = &gbuf.samples[i];
-                        if !gq.reflects() {
+                        let i = base + qx as usize;
+                        let (pq, nq, valid) = guide[i];
+                        if valid == 0.0 {
                             continue;
                         }
                         let tx = if (qx - x).abs() == r { 0.5 } else { 1.0 };
-                        let wn = gp.n.dot(gq.n).max(0.0).powi(self.normal_power as i32);
-                        let wd = (-(gp.p - gq.p).length_squared() * inv_2s2).exp();
+                        let wn = pow_u(np.dot(nq).max(0.0), self.normal_power);
+                        let wd = (-(pp - pq).length_squared() * inv_2s2).exp();
                         let wt = tx * ty * wn * wd;
                         sum += e.data[i] * wt;
                         wsum += wt;
@@ -81,6 +92,20 @@ impl CrossBilateral {
         });
         out
     }
+}
+
+/// x^k by squaring (`powi` is a library call in the inner loop).
+#[inline(always)]
+fn pow_u(mut x: f32, mut k: u32) -> f32 {
+    let mut r = 1.0;
+    while k > 0 {
+        if k & 1 == 1 {
+            r *= x;
+        }
+        x *= x;
+        k >>= 1;
+    }
+    r
 }
 
 #[cfg(test)]

@@ -98,30 +98,97 @@ impl ShadowMaps {
 
     #[inline]
     fn lookup(&self, m: &Map, x: Vec3, n_x: Vec3) -> f32 {
+        let v = self.view_of(m);
         let d = x - m.origin;
-        let dist2 = d.length_squared();
-        if dist2 <= 0.0 {
-            return 1.0;
+        if v.visible(d, d.length_squared(), -n_x.dot(d)) { 1.0 } else { 0.0 }
+    }
+
+    #[inline]
+    fn view_of<'a>(&self, m: &'a Map) -> MapView<'a> {
+        MapView {
+            origin: m.origin,
+            frame: m.frame,
+            depth: &m.depth,
+            res: self.res as usize,
+            half: 0.5 * self.res as f32,
+            max: (self.res - 1) as f32,
+            texel: 2.0 / self.res as f32,
+            eps2: 2.0 * self.eps,
+            bias_scale: self.bias_scale,
         }
-        let inv = dist2.sqrt().recip();
-        let dist = dist2 * inv;
-        let lz = d.dot(m.frame.n) * inv;
+    }
+
+    /// The map of `slot`, for loops that query one VPL many times.
+    #[inline]
+    pub fn view(&self, slot: usize) -> Option<MapView<'_>> {
+        match self.maps.get(slot) {
+            Some(Some(m)) => Some(self.view_of(m)),
+            _ => None,
+        }
+    }
+}
+
+/// One VPL's shadow map, borrowed for a batch of queries.
+#[derive(Clone, Copy, Debug)]
+pub struct MapView<'a> {
+    /// Where the map's rays start: the VPL stepped off its surface.
+    pub origin: Vec3,
+    frame: LocalFrame,
+    depth: &'a [f32],
+    res: usize,
+    half: f32,
+    max: f32,
+    texel: f32,
+    eps2: f32,
+    bias_scale: f32,
+}
+
+impl MapView<'_> {
+    /// The map's frame (+Z along the VPL normal).
+    pub fn frame(&self) -> LocalFrame {
+        self.frame
+    }
+
+    /// Depth of texel (i, j), each clamped into the map.
+    #[inline(always)]
+    pub fn depth_at(&self, i: f32, j: f32) -> f32 {
+        let i = (i.clamp(0.0, self.max)) as usize;
+        let j = (j.clamp(0.0, self.max)) as usize;
+        self.depth[j * self.res + i]
+    }
+
+    /// Half the resolution: texel coordinate = (u + 1) · half.
+    pub fn half(&self) -> f32 {
+        self.half
+    }
+
+    /// The bias terms: (2ε, k · 2/res).
+    pub fn bias_terms(&self) -> (f32, f32) {
+        (self.eps2, self.bias_scale * self.texel)
+    }
+
+    /// Whether a receiver at `origin + d` (|d|² = `d2`) is visible; `cos_x`
+    /// is −n_x·d, the receiver's unnormalised cosine toward the VPL.
+    #[inline(always)]
+    pub fn visible(&self, d: Vec3, d2: f32, cos_x: f32) -> bool {
+        if d2 <= 0.0 {
+            return true;
+        }
+        let inv = 1.0 / d2.sqrt();
+        let dist = d2 * inv;
+        let lz = d.dot(self.frame.n) * inv;
         if lz <= 0.0 {
-            return 0.0;
+            return false;
         }
-        let (lx, ly) = (d.dot(m.frame.s) * inv, d.dot(m.frame.t) * inv);
-        let k = 1.0 / (1.0 + lz);
-        let half = 0.5 * self.res as f32;
-        let max = (self.res - 1) as f32;
-        let i = ((lx * k + 1.0) * half).clamp(0.0, max) as usize;
-        let j = ((ly * k + 1.0) * half).clamp(0.0, max) as usize;
-        let depth = m.depth[j * self.res as usize + i];
-        // Bias: the receiver's depth change across one texel (see the type's docs).
-        let cos_r = (n_x.dot(d) * inv).abs();
+        let k = inv / (1.0 + lz);
+        let i = ((d.dot(self.frame.s) * k + 1.0) * self.half).clamp(0.0, self.max) as usize;
+        let j = ((d.dot(self.frame.t) * k + 1.0) * self.half).clamp(0.0, self.max) as usize;
+        let depth = self.depth[j * self.res + i];
+        // Bias: the receiver's depth change across one texel (see ShadowMaps).
+        let cos_r = (cos_x * inv).abs();
         let tan = ((1.0 - cos_r * cos_r).max(0.0).sqrt() / cos_r.max(0.1)).min(10.0);
-        let texel = dist * (2.0 / self.res as f32) * (1.0 + lz);
-        let bias = 2.0 * self.eps + self.bias_scale * texel * (0.5 + tan);
-        if dist - bias <= depth { 1.0 } else { 0.0 }
+        let bias = self.eps2 + self.bias_scale * dist * self.texel * (1.0 + lz) * (0.5 + tan);
+        dist - bias <= depth
     }
 }
 
@@ -174,6 +241,10 @@ impl VplVisibility for ShadowMaps {
                 *wi *= self.lookup(m, rx.p(i), rx.n(i));
             }
         }
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 
     fn memory_bytes(&self) -> usize {

@@ -89,7 +89,8 @@ impl InterleavedShader {
     /// unfiltered: reflected radiance is ρ(x)/π · E(x).
     pub fn irradiance(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
         let clamp = self.clamp;
-        let subsets = self.subsets(vpls.len()).to_vec();
+        self.subsets(vpls.len());
+        let subsets = &self.subsets.as_ref().expect("just built").1;
         let mut pixels: Vec<Vec<u32>> = vec![Vec::new(); CLASSES];
         for y in 0..gbuf.height {
             for x in 0..gbuf.width {

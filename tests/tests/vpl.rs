@@ -19,7 +19,7 @@ fn cornell(size: u32) -> (Scene, Camera) {
 }
 
 fn ir(scene: &Scene, vpls: usize, seed: u64) -> VplSet {
-    InstantRadiosity::new(IrConfig { vpls, bounces: 3, sampling: PathSampling::Random }).unwrap().sample(scene, seed).clone()
+    InstantRadiosity::new(IrConfig { vpls, bounces: 3, sampling: PathSampling::Random, fresh_paths: false }).unwrap().sample(scene, seed).clone()
 }
 
 fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<GeometryClamp>) -> Image {

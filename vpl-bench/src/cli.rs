@@ -92,3 +92,54 @@ mod tests {
         assert!("3".parse::<PixelArg>().is_err());
     }
 }
+
+/// `--frames A..B`: frames A up to, not including, B; `A..` runs to the end
+/// of the sequence; a single number is that frame alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FramesArg {
+    /// First frame.
+    pub start: u32,
+    /// One past the last frame; `None`: the end of the sequence.
+    pub end: Option<u32>,
+}
+
+impl FramesArg {
+    /// The range within a sequence of `count` frames.
+    pub fn range(self, count: u32) -> std::ops::Range<u32> {
+        self.start..self.end.unwrap_or(count)
+    }
+}
+
+impl FromStr for FramesArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let num = |t: &str| t.trim().parse::<u32>().map_err(|_| format!("frames '{s}' must look like 0..90, 30.. or 12"));
+        let (start, end) = match s.split_once("..") {
+            Some((a, b)) if b.trim().is_empty() => (num(a)?, None),
+            Some((a, b)) => (num(a)?, Some(num(b)?)),
+            None => {
+                let a = num(s)?;
+                (a, Some(a.checked_add(1).ok_or_else(|| format!("frames '{s}' is too large"))?))
+            }
+        };
+        if end.is_some_and(|e| e <= start) {
+            return Err(format!("frames '{s}' is empty: the end must come after the start"));
+        }
+        Ok(FramesArg { start, end })
+    }
+}
+
+#[cfg(test)]
+mod frames_tests {
+    use super::*;
+
+    #[test]
+    fn parses_ranges() {
+        assert_eq!("3..9".parse(), Ok(FramesArg { start: 3, end: Some(9) }));
+        assert_eq!("5..".parse::<FramesArg>().unwrap().range(20), 5..20);
+        assert_eq!("7".parse::<FramesArg>().unwrap().range(20), 7..8);
+        assert!("9..3".parse::<FramesArg>().is_err());
+        assert!("a..3".parse::<FramesArg>().is_err());
+        assert!("3..3".parse::<FramesArg>().is_err());
+    }
+}

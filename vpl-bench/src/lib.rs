@@ -20,5 +20,7 @@
 pub mod cli;
 pub mod compare;
 pub mod metrics;
+pub mod pipeline;
+pub mod sequence;
 pub mod stages;
 pub mod validation;

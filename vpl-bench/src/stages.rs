@@ -85,3 +85,51 @@ pub fn bench_stages(name: &str, size: (u32, u32), vpls: usize, repeat: u32) -> R
     b.indirect_frame = b.gbuffer + b.shadow_maps_16 + b.gather + b.filter;
     Ok(b)
 }
+
+/// Median milliseconds per step of the SMC sampler, in the columns of the
+/// SMC paper's Table 2 ("Sampling VPLs").
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SmcBench {
+    /// Camera points, candidate rays, undersampled regions, replacement.
+    pub candidates: f64,
+    /// Drawing candidates from the weighted hits.
+    pub resampling: f64,
+    /// Mailboxes and rays toward unverified VPLs.
+    pub visibility: f64,
+    /// Radiosity estimates (16 NEE paths per candidate).
+    pub radiosity: f64,
+    /// k-d trees and kNN queries.
+    pub knn: f64,
+    /// The whole sampler step.
+    pub total: f64,
+    /// VPLs that moved per frame (median).
+    pub moved: f64,
+}
+
+/// Times `repeat` SMC frames on built-in scene `name` with budget `vpls`,
+/// the camera walking the scene's sequence from frame `start` (one frame a
+/// step, so indirect visibility has work), after a 20-iteration warm-up at
+/// that frame (not timed).
+pub fn bench_smc(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: u32) -> Result<SmcBench, CoreError> {
+    let setup = SceneSetup::load(name)?;
+    let config = vpl_sampling::SmcConfig { vpls, ..vpl_sampling::SmcConfig::default() };
+    let mut smc = vpl_sampling::SmcSampler::new(config).map_err(|e| CoreError::Invalid(e.to_string()))?;
+    let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
+    let frame = |f: u32| -> Result<_, CoreError> {
+        let (scene, camera) = setup.frame((start + f).min(count - 1))?;
+        Ok((scene, camera.with_resolution(size)?))
+    };
+    let (scene, camera) = frame(0)?;
+    for _ in 0..20 {
+        smc.iterate(&scene, &camera, 0);
+    }
+    let mut rows: Vec<[f64; 7]> = Vec::new();
+    for f in 1..=repeat {
+        let (scene, camera) = frame(f)?;
+        let moved = smc.iterate(&scene, &camera, 0).moved_count() as f64;
+        let t = smc.timings();
+        rows.push([t.candidates_ms, t.resampling_ms, t.visibility_ms, t.radiosity_ms, t.knn_ms, t.total_ms, moved]);
+    }
+    let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
+    Ok(SmcBench { candidates: col(0), resampling: col(1), visibility: col(2), radiosity: col(3), knn: col(4), total: col(5), moved: col(6) })
+}

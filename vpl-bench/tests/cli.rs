@@ -66,7 +66,10 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--mode", "sideways"], "sideways");
     fails(&d, &["--scene", "cornell", "--clamp", "-3"], "clamp");
     fails(&d, &["--scene", "cornell", "--threads", "0"], "threads");
-    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc"], "not available");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "tcas"], "not available");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--resample-ratio", "0"], "resample-ratio");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--knn-k", "0"], "knn-k");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--max-depth", "2"], "max depth");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "xyz"], "unknown sampler");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--shadowmap-res", "0"], "shadowmap-res");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--vpls", "0"], "vpls");
@@ -152,5 +155,35 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
         let img = vpl_core::Image::read_exr(&out).unwrap();
         assert!(img.mean()[0] > 0.05, "{vis}: {:?}", img.mean());
         assert!(d.join(format!("{vis}.png")).exists());
+    }
+}
+
+/// `vpl sequence` with SMC: one EXR and PNG per frame, tracked.csv with 8
+/// pixels per frame, frames.csv with at most M_max VPLs moved after the
+/// first frame; bad frame ranges are one line and exit 2.
+#[test]
+fn sequence_writes_frames_and_csvs() {
+    let d = scratch("sequence");
+    let out = d.join("run");
+    let o = vpl()
+        .args(["sequence", "--scene", "office", "--sampler", "smc", "--vpls", "128", "--warmup", "3", "--m-max", "5", "--frames", "10..13", "--size", "32x18", "--shadowmap-res", "16", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in 10..13 {
+        assert!(out.join(format!("frame_{f:04}.exr")).exists() && out.join(format!("frame_{f:04}.png")).exists());
+    }
+    let tracked = std::fs::read_to_string(out.join("tracked.csv")).unwrap();
+    assert_eq!(tracked.lines().count(), 1 + 3 * 8);
+    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let moved: Vec<usize> = frames.lines().skip(1).map(|l| l.split(',').nth(8).unwrap().parse().unwrap()).collect();
+    assert_eq!(moved.len(), 3);
+    assert!(moved[1..].iter().all(|&m| m <= 5), "{moved:?}");
+    for (args, needle) in [(vec!["--frames", "9000.."], "does not fit"), (vec!["--frames", "5..2"], "frames"), (vec!["--frame", "3"], "--frames")] {
+        let o = vpl().args(["sequence", "--scene", "office", "--size", "8x8", "--out"]).arg(d.join("bad")).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.lines().count() == 1 && err.contains(needle), "{args:?}: {err}");
     }
 }

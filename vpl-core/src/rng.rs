@@ -31,6 +31,14 @@ impl Purpose {
     pub const INTERLEAVE: Purpose = Purpose(8);
     /// Light samples of deterministic direct lighting (index = pixel index).
     pub const DIRECT: Purpose = Purpose(9);
+    /// Camera points a VPL sampler casts (index = point number).
+    pub const CAMERA_POINTS: Purpose = Purpose(10);
+    /// Candidate rays of the SMC sampler (index = candidate ray).
+    pub const CANDIDATE: Purpose = Purpose(11);
+    /// Weighted resampling of candidates (index = draw).
+    pub const RESAMPLE: Purpose = Purpose(12);
+    /// Indirect-visibility rays toward a VPL (index = VPL slot).
+    pub const INDIRECT_VISIBILITY: Purpose = Purpose(13);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

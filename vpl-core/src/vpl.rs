@@ -29,7 +29,8 @@ pub struct Vpl {
     pub id: u64,
     /// Scattering vertices between the light and `y`, `y` included (1 = lit
     /// directly). A camera point lit by this VPL ends a path with
-    /// `bounce + 1` scattering vertices.
+    /// `bounce + 1` scattering vertices. 0 when the sampler marginalises over
+    /// the light paths that reach `y` (SMC's radiosity estimates).
     pub bounce: u32,
 }
 
@@ -52,6 +53,11 @@ impl Vpl {
 /// The VPLs of a frame in fixed slots, and which slots changed since the
 /// previous frame, so that visibility structures rebuild only what moved.
 ///
+/// Two kinds of change are tracked: *changed* (any field differs, flux
+/// included) and *moved* (the slot holds a different VPL: position, normal,
+/// id or occupancy differ). A sampler that re-weights a VPL in place changes
+/// it without moving it, and a shadow map stays valid.
+///
 /// A slot may be empty: Instant Radiosity leaves one empty when its light
 /// path leaves the scene. Estimators treat an empty slot as a VPL of zero
 /// flux, so the slot count, not the stored count, is the `I` of eq. (2).
@@ -59,6 +65,7 @@ impl Vpl {
 pub struct VplSet {
     slots: Vec<Option<Vpl>>,
     changed: Vec<bool>,
+    moved: Vec<bool>,
     /// Light paths the sampler traced for this frame (for reports).
     pub light_paths: u64,
 }
@@ -66,7 +73,7 @@ pub struct VplSet {
 impl VplSet {
     /// `capacity` empty slots, all marked changed.
     pub fn new(capacity: usize) -> VplSet {
-        VplSet { slots: vec![None; capacity], changed: vec![true; capacity], light_paths: 0 }
+        VplSet { slots: vec![None; capacity], changed: vec![true; capacity], moved: vec![true; capacity], light_paths: 0 }
     }
 
     /// Number of slots (the budget I).
@@ -88,23 +95,41 @@ impl VplSet {
     }
 
     /// Puts `vpl` (or nothing) into `slot`, marking the slot changed when its
-    /// content differs from what was there.
+    /// content differs from what was there, and moved when it holds another VPL.
     pub fn set(&mut self, slot: usize, vpl: Option<Vpl>) {
         if self.slots[slot] != vpl {
+            let same = |a: &Vpl, b: &Vpl| a.y == b.y && a.n == b.n && a.id == b.id;
+            if !matches!((&self.slots[slot], &vpl), (Some(a), Some(b)) if same(a, b)) {
+                self.moved[slot] = true;
+            }
             self.slots[slot] = vpl;
             self.changed[slot] = true;
         }
     }
 
-    /// Resizes to `capacity` slots; new slots are empty and marked changed.
+    /// Resizes to `capacity` slots; new slots are empty and marked changed and moved.
     pub fn resize(&mut self, capacity: usize) {
         self.slots.resize(capacity, None);
         self.changed.resize(capacity, true);
+        self.moved.resize(capacity, true);
     }
 
-    /// Starts a new frame: no slot has changed yet.
+    /// Starts a new frame: no slot has changed or moved yet.
     pub fn begin_frame(&mut self) {
         self.changed.iter_mut().for_each(|c| *c = false);
+        self.moved.iter_mut().for_each(|c| *c = false);
+    }
+
+    /// Whether `slot` holds another VPL than at [`VplSet::begin_frame`]
+    /// (position, normal, id or occupancy differ; a new flux alone is not a move).
+    #[inline]
+    pub fn moved(&self, slot: usize) -> bool {
+        self.moved[slot]
+    }
+
+    /// Number of moved slots.
+    pub fn moved_count(&self) -> usize {
+        self.moved.iter().filter(|c| **c).count()
     }
 
     /// Whether `slot` changed since [`VplSet::begin_frame`].
@@ -159,6 +184,14 @@ mod tests {
         assert_eq!(s.changed_count(), 0);
         s.set(2, Some(vpl(2.0)));
         assert!(s.changed(2) && !s.changed(0));
+        assert_eq!(s.moved_count(), 1);
+        s.begin_frame();
+        s.set(2, Some(Vpl { flux: Vec3::splat(3.0), ..vpl(2.0) }));
+        assert!(s.changed(2) && !s.moved(2));
+        s.set(2, Some(vpl(2.0)));
+        s.set(2, None);
+        assert!(s.moved(2) && s.moved_count() == 1);
+        s.set(2, Some(vpl(2.0)));
         assert_eq!(s.stored(), 2);
         assert_eq!(s.total_flux(), Vec3::splat(2.0));
     }

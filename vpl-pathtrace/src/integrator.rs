@@ -92,8 +92,7 @@ impl PathTracer {
                 if let Some((ls, p_sel)) = scene.sample_light(sp.p, u_sel, (u_l0, u_l1)) {
                     let cos = sp.n.dot(ls.wi);
                     if cos > 0.0 && ls.wi.dot(sp.ng) > 0.0 {
-                        let t_max = if ls.dist.is_finite() { ls.dist * (1.0 - 1e-4) - eps } else { f32::INFINITY };
-                        if !scene.occluded(&Ray::segment(sp.p + sp.ng * eps, ls.wi, t_max)) {
+                        if scene.light_unoccluded(sp.p, sp.ng, &ls) {
                             if ls.delta {
                                 l += beta * f * ls.li * (cos / p_sel);
                             } else {

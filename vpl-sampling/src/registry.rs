@@ -2,9 +2,10 @@
 
 use vpl_core::VplSampler;
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
+use vpl_smc::{SmcConfig, SmcSampler};
 
 /// What every sampler is built from. Fields a sampler does not use are ignored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SamplerConfig {
     /// The VPL budget I.
     pub vpls: usize,
@@ -13,11 +14,16 @@ pub struct SamplerConfig {
     pub max_depth: u32,
     /// Random or Halton light paths (samplers that trace them from the lights).
     pub sampling: PathSampling,
+    /// New light paths every frame (IR; see [`IrConfig::fresh_paths`]).
+    pub fresh_paths: bool,
+    /// The SMC sampler's settings; its `vpls` and `radiosity_bounces` are
+    /// taken from `vpls` and `max_depth` above.
+    pub smc: SmcConfig,
 }
 
 impl Default for SamplerConfig {
     fn default() -> Self {
-        SamplerConfig { vpls: 2048, max_depth: 5, sampling: PathSampling::Random }
+        SamplerConfig { vpls: 2048, max_depth: 5, sampling: PathSampling::Random, fresh_paths: false, smc: SmcConfig::default() }
     }
 }
 
@@ -25,6 +31,12 @@ impl SamplerConfig {
     /// Light-path bounces that carry VPLs: `max_depth − 2`.
     pub fn bounces(&self) -> u32 {
         self.max_depth.saturating_sub(2)
+    }
+
+    /// The SMC settings with this config's budget and depth: radiosity paths
+    /// of `max_depth − 3` bounces after the VPL.
+    pub fn smc_config(&self) -> SmcConfig {
+        SmcConfig { vpls: self.vpls, radiosity_bounces: self.max_depth.saturating_sub(3), ..self.smc }
     }
 }
 
@@ -53,18 +65,30 @@ pub struct SamplerEntry {
 }
 
 /// Every sampler this build has.
-pub const SAMPLERS: &[SamplerEntry] = &[SamplerEntry {
-    name: "ir",
-    about: "Instant Radiosity (Keller 1997): VPLs at the diffuse vertices of light paths",
-    build: |c| {
-        InstantRadiosity::new(IrConfig { vpls: c.vpls, bounces: c.bounces(), sampling: c.sampling })
-            .map(|s| Box::new(s) as Box<dyn VplSampler>)
-            .map_err(|e| SamplingError::Config("ir", e.to_string()))
+pub const SAMPLERS: &[SamplerEntry] = &[
+    SamplerEntry {
+        name: "ir",
+        about: "Instant Radiosity (Keller 1997): VPLs at the diffuse vertices of light paths",
+        build: |c| {
+            InstantRadiosity::new(IrConfig { vpls: c.vpls, bounces: c.bounces(), sampling: c.sampling, fresh_paths: c.fresh_paths })
+                .map(|s| Box::new(s) as Box<dyn VplSampler>)
+                .map_err(|e| SamplingError::Config("ir", e.to_string()))
+        },
     },
-}];
+    SamplerEntry {
+        name: "smc",
+        about: "Sequential Monte Carlo Instant Radiosity (Hedman et al. 2017): temporally coherent VPLs on indirectly visible surfaces",
+        build: |c| {
+            if c.max_depth < 3 {
+                return Err(SamplingError::Config("smc", format!("max depth {} has no indirect light for VPLs to carry (at least 3)", c.max_depth)));
+            }
+            SmcSampler::new(c.smc_config()).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(|e| SamplingError::Config("smc", e.to_string()))
+        },
+    },
+];
 
 /// Names of the samplers the toolkit plans but this build does not have.
-pub const PLANNED: &[&str] = &["rr", "mir", "mir-resample", "tcas", "smc"];
+pub const PLANNED: &[&str] = &["rr", "mir", "mir-resample", "tcas"];
 
 /// Builds the sampler called `name`.
 pub fn build(name: &str, config: &SamplerConfig) -> Result<Box<dyn VplSampler>, SamplingError> {
@@ -83,7 +107,11 @@ mod tests {
     #[test]
     fn names_resolve_or_explain() {
         assert_eq!(build("ir", &SamplerConfig::default()).unwrap().name(), "ir");
-        assert!(matches!(build("smc", &SamplerConfig::default()), Err(SamplingError::NotAvailable(..))));
+        assert_eq!(build("smc", &SamplerConfig::default()).unwrap().name(), "smc");
+        assert!(matches!(build("tcas", &SamplerConfig::default()), Err(SamplingError::NotAvailable(..))));
+        assert!(matches!(build("smc", &SamplerConfig { max_depth: 2, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
+        let bad = SamplerConfig { smc: SmcConfig { resample_ratio: 0, ..SmcConfig::default() }, ..SamplerConfig::default() };
+        assert!(matches!(build("smc", &bad), Err(SamplingError::Config(..))));
         assert!(matches!(build("xyz", &SamplerConfig::default()), Err(SamplingError::Unknown(..))));
         assert!(matches!(build("ir", &SamplerConfig { vpls: 0, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
     }

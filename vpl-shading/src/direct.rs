@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, GBuffer, Image, Purpose, Ray, Scene};
+use vpl_core::{stream, GBuffer, Image, Purpose, Scene};
 
 /// Light reflected once at every G-buffer point (single scattering, k = 1).
 ///
@@ -16,7 +16,6 @@ use vpl_core::{stream, GBuffer, Image, Purpose, Ray, Scene};
 /// spot, sun) are exact with one sample each.
 pub fn direct_light(scene: &Scene, gbuf: &GBuffer, samples: u32, seed: u64) -> Image {
     let mut img = Image::new(gbuf.width, gbuf.height);
-    let eps = scene.epsilon();
     let s = samples.max(1);
     img.data.par_chunks_mut(gbuf.width.max(1) as usize).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
@@ -34,8 +33,7 @@ pub fn direct_light(scene: &Scene, gbuf: &GBuffer, samples: u32, seed: u64) -> I
                 if cos <= 0.0 || ls.wi.dot(g.ng) <= 0.0 {
                     continue;
                 }
-                let t_max = if ls.dist.is_finite() { ls.dist * (1.0 - 1e-4) - eps } else { f32::INFINITY };
-                if scene.occluded(&Ray::segment(g.p + g.ng * eps, ls.wi, t_max)) {
+                if !scene.light_unoccluded(g.p, g.ng, &ls) {
                     continue;
                 }
                 sum += ls.li * (cos / (p_sel * ls.pdf));

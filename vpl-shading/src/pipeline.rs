@@ -58,6 +58,8 @@ pub struct FrameOutput {
     pub timings: StageTimings,
     /// What the visibility update did.
     pub visibility: VisibilityUpdate,
+    /// VPL slots that moved since the previous frame (see `VplSet::moved`).
+    pub moved: usize,
     /// The sampler's report line ("" when the mode needs no VPLs).
     pub sampler_report: String,
 }
@@ -86,12 +88,14 @@ pub fn render_frame(
     let mut image = Image::new(camera.resolution.0, camera.resolution.1);
     let mut visibility = VisibilityUpdate::default();
     let mut sampler_report = String::new();
+    let mut moved = 0;
     let (_, max_k) = s.mode.k_range(s.max_depth);
     if s.mode != Mode::Direct && max_k >= 2 {
         let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous: None };
         let t0 = Instant::now();
         let vpls = sampler.next_frame(&frame);
         t.sampling_ms = ms(t0);
+        moved = vpls.moved_count();
         let t0 = Instant::now();
         visibility = vis.update(scene, vpls);
         t.visibility_ms = ms(t0);
@@ -114,5 +118,5 @@ pub fn render_frame(
         }
     }
     t.total_ms = ms(start);
-    FrameOutput { image, gbuffer, timings: t, visibility, sampler_report }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, sampler_report }
 }

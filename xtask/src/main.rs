@@ -6,7 +6,8 @@
 //!   Mitsuba 3 (`results/validation/`), and `results/README.md`.
 //! - `cargo xtask test`: the whole test suite, as CI runs it.
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
-//! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and `office`.
+//! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and
+//!   `office`, and the SMC sampler's steps (the SMC paper's Table 2) on `office` and `maze`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};

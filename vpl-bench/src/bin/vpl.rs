@@ -7,9 +7,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use vpl_bench::cli::{ClampArg, PixelArg, Size};
+use vpl_bench::cli::{ClampArg, FramesArg, PixelArg, Size};
 use vpl_core::image::{preview_path, write_atomic};
-use vpl_core::{IndirectShader, Mode, SceneSetup, VplVisibility};
+use vpl_core::{Mode, SceneSetup};
 use vpl_pathtrace::{render, track, PathTracer, RenderSettings};
 
 #[derive(Parser)]
@@ -92,12 +92,30 @@ enum PathSamplingArg {
 /// Settings of `--method vpl`.
 #[derive(clap::Args)]
 struct VplArgs {
-    /// VPL sampler (ir; rr, mir, mir-resample, tcas, smc are planned).
+    /// VPL sampler: ir or smc (rr, mir, mir-resample, tcas are planned).
     #[arg(long, default_value = "ir")]
     sampler: String,
-    /// How light paths draw their numbers.
+    /// How light paths draw their numbers (ir).
     #[arg(long, value_enum, default_value_t = PathSamplingArg::Random)]
     path_sampling: PathSamplingArg,
+    /// New light paths every frame (ir; without it a static scene keeps its VPLs).
+    #[arg(long)]
+    fresh_paths: bool,
+    /// SMC: VPLs allowed to move per frame (M_max).
+    #[arg(long, default_value_t = 16)]
+    m_max: usize,
+    /// SMC: candidate-ray hits per candidate (16 resamples 16·I hits to I candidates).
+    #[arg(long, default_value_t = 16)]
+    resample_ratio: usize,
+    /// SMC: path-traced paths per VPL radiosity estimate.
+    #[arg(long, default_value_t = 16)]
+    radiosity_paths: u32,
+    /// SMC: k of the VPL densities (default max(1, floor(sqrt(I/32))), eq. 8).
+    #[arg(long)]
+    knn_k: Option<usize>,
+    /// SMC: iterations before the first frame.
+    #[arg(long, default_value_t = 100)]
+    warmup: u32,
     /// VPL-to-pixel visibility.
     #[arg(long, value_enum, default_value_t = VisibilityArg::Shadowmap)]
     visibility: VisibilityArg,
@@ -145,6 +163,32 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Render frames of a scene's sequence with VPLs, the sampler keeping its state from frame to
+    /// frame: one EXR (and PNG preview) per frame, tracked.csv (tracked pixels) and frames.csv (timings).
+    Sequence {
+        #[command(flatten)]
+        s: SceneArgs,
+        /// Frames A..B (B not included), A.. (to the end) or one frame N. Default: the whole sequence.
+        #[arg(long)]
+        frames: Option<FramesArg>,
+        /// Which light paths to include.
+        #[arg(long, value_enum, default_value_t = ModeArg::Full)]
+        mode: ModeArg,
+        #[command(flatten)]
+        v: VplArgs,
+        /// A tracked pixel X,Y (repeat for more; default: 8 pixels spread over the image).
+        #[arg(long = "pixel")]
+        pixels: Vec<PixelArg>,
+        /// Output folder (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Exposure applied to the PNG previews.
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+        /// No progress bar or summary.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Many path-traced samples at a few pixels: ground truth with standard errors, as CSV.
     Track {
         #[command(flatten)]
@@ -182,7 +226,8 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
-    /// Milliseconds per VPL stage at 640×360 with 2048 IR VPLs on `cornell` and `office`.
+    /// Milliseconds per VPL stage at 640×360 with 2048 IR VPLs on `cornell` and `office`, and the
+    /// SMC sampler's steps (Table 2 of Hedman et al.) on `office` (I VPLs) and `maze` (I/4).
     BenchVpl {
         /// Timed repetitions of each stage (the median is reported).
         #[arg(long, default_value_t = 5)]
@@ -405,6 +450,62 @@ fn run(cli: Cli) -> Res<()> {
             }
             emit(out.as_deref(), &csv)
         }
+        Command::Sequence { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, frames, mode, v, pixels, out, exposure, quiet } => {
+            if frame != 0 {
+                return Err("--frame is for render; a sequence takes --frames A..B".into());
+            }
+            check_depth(max_depth, vpls)?;
+            if !(exposure.is_finite() && exposure > 0.0) {
+                return Err("--exposure must be positive".into());
+            }
+            if out.exists() && !out.is_dir() {
+                return Err(format!("--out {} is not a directory", out.display()));
+            }
+            let pool = pool(threads)?;
+            let setup = SceneSetup::load(&scene).map_err(|e| e.to_string())?;
+            for w in &setup.warnings {
+                eprintln!("vpl: warning: {w}");
+            }
+            let count = setup.sequence.as_ref().map_or(1, |q| q.frame_count());
+            let range = frames.unwrap_or(FramesArg { start: 0, end: None }).range(count);
+            if range.start >= range.end || range.end > count {
+                return Err(format!("--frames {}..{} does not fit the sequence of {count} frames", range.start, range.end));
+            }
+            let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
+            let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
+            let res = match size {
+                Some(Size(w, h)) => (w, h),
+                None => setup.camera.resolution,
+            };
+            let tracked: Vec<(u32, u32)> = if pixels.is_empty() { vpl_bench::sequence::default_tracked_pixels(res.0, res.1) } else { pixels.iter().map(|p| (p.0, p.1)).collect() };
+            std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(range.len() as u64) };
+            bar.set_style(ProgressStyle::with_template("{elapsed_precise} [{bar:40}] frame {pos}/{len} {msg}, eta {eta}").unwrap().progress_chars("=> "));
+            let start = Instant::now();
+            let done = pool
+                .install(|| {
+                    vpl_bench::sequence::run_sequence(&setup, range.clone(), size.map(|s| (s.0, s.1)), &mut p, &tracked, Some((&out, exposure)), &mut |f, _| {
+                        bar.set_message(format!("{:.0} ms, {} VPLs moved", f.timings.total_ms, f.moved));
+                        bar.inc(1);
+                    })
+                })
+                .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
+            if !quiet {
+                let mean_ms = done.iter().map(|f| f.timings.total_ms).sum::<f64>() / done.len() as f64;
+                let moved = done.iter().skip(1).map(|f| f.moved).max().unwrap_or(0);
+                eprintln!(
+                    "vpl: {} frames {}..{} with {} in {:.1} s ({mean_ms:.0} ms a frame; at most {moved} VPLs moved between frames) -> {}",
+                    setup.scene.name,
+                    range.start,
+                    range.end,
+                    v.sampler,
+                    start.elapsed().as_secs_f64(),
+                    out.display()
+                );
+            }
+            Ok(())
+        }
         Command::ExportScene { name, out } => {
             let setup = SceneSetup::load(&name).map_err(|e| e.to_string())?;
             emit(out.as_deref(), &setup.to_toml())
@@ -450,6 +551,17 @@ fn run(cli: Cli) -> Res<()> {
                     b.gbuffer, b.direct, b.sampling, b.shadow_maps_all, b.shadow_maps_16, b.gather, b.filter, b.indirect_frame
                 );
             }
+            println!();
+            println!("SMC sampling (Table 2 of Hedman et al.), camera walking the sequence from frame 300, median of {} frames (ms):", repeat.max(15));
+            println!("| scene | VPLs | cand. sampling | cand. resampling | indirect visibility | radiosity | kNN | **total** | VPLs moved |");
+            println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+            for (name, budget) in [("office", vpls), ("maze", (vpls / 4).max(1))] {
+                let b = pool.install(|| vpl_bench::stages::bench_smc(name, (size.0, size.1), budget, 300, repeat.max(15))).map_err(|e| e.to_string())?;
+                println!(
+                    "| {name} | {budget} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | **{:.1}** | {:.0} |",
+                    b.candidates, b.resampling, b.visibility, b.radiosity, b.knn, b.total, b.moved
+                );
+            }
             Ok(())
         }
         Command::ValidateCornell { spp, data, out, seed } => {
@@ -479,6 +591,54 @@ fn run(cli: Cli) -> Res<()> {
     }
 }
 
+/// The pipeline that `--method vpl` and its flags describe.
+fn pipeline_spec(v: &VplArgs, vpls: usize, max_depth: u32, mode: ModeArg, clamp: Option<vpl_core::GeometryClamp>, seed: u64) -> Res<vpl_bench::pipeline::PipelineSpec> {
+    use vpl_bench::pipeline::{PipelineSpec, ShadingSpec, VisibilitySpec};
+    if v.direct_samples == 0 {
+        return Err("--direct-samples must be at least 1".into());
+    }
+    if v.visibility == VisibilityArg::Shadowmap {
+        vpl_visibility::ShadowMaps::new(v.shadowmap_res).map_err(|e| format!("--shadowmap-res: {e}"))?;
+    }
+    let defaults = vpl_sampling::SmcConfig::default();
+    if v.resample_ratio == 0 || v.radiosity_paths == 0 || v.knn_k == Some(0) {
+        return Err("--resample-ratio, --radiosity-paths and --knn-k must be at least 1".into());
+    }
+    let config = vpl_sampling::SamplerConfig {
+        vpls,
+        max_depth,
+        sampling: match v.path_sampling {
+            PathSamplingArg::Random => vpl_sampling::PathSampling::Random,
+            PathSamplingArg::Halton => vpl_sampling::PathSampling::Halton,
+        },
+        fresh_paths: v.fresh_paths,
+        smc: vpl_sampling::SmcConfig {
+            m_max: v.m_max,
+            resample_ratio: v.resample_ratio,
+            radiosity_paths: v.radiosity_paths,
+            knn_k: v.knn_k,
+            warmup: v.warmup,
+            ..defaults
+        },
+    };
+    Ok(PipelineSpec {
+        sampler: v.sampler.clone(),
+        config,
+        visibility: match v.visibility {
+            VisibilityArg::Raytrace => VisibilitySpec::RayTraced,
+            VisibilityArg::Shadowmap => VisibilitySpec::ShadowMaps(v.shadowmap_res),
+        },
+        shading: match v.shading {
+            ShadingArg::Exhaustive => ShadingSpec::Exhaustive,
+            ShadingArg::Interleaved => ShadingSpec::Interleaved { filter: !v.no_filter },
+        },
+        clamp,
+        mode: mode_of(mode),
+        direct_samples: v.direct_samples,
+        seed,
+    })
+}
+
 /// `vpl render --method vpl`.
 #[allow(clippy::too_many_arguments)]
 fn render_vpl(
@@ -496,43 +656,10 @@ fn render_vpl(
     quiet: bool,
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
-    if v.direct_samples == 0 {
-        return Err("--direct-samples must be at least 1".into());
-    }
-    let config = vpl_sampling::SamplerConfig {
-        vpls,
-        max_depth,
-        sampling: match v.path_sampling {
-            PathSamplingArg::Random => vpl_sampling::PathSampling::Random,
-            PathSamplingArg::Halton => vpl_sampling::PathSampling::Halton,
-        },
-    };
-    let mut sampler = vpl_sampling::build(&v.sampler, &config).map_err(|e| e.to_string())?;
-    let mut vis: Box<dyn VplVisibility> = match v.visibility {
-        VisibilityArg::Raytrace => Box::new(vpl_visibility::RayTraced::default()),
-        VisibilityArg::Shadowmap => Box::new(vpl_visibility::ShadowMaps::new(v.shadowmap_res).map_err(|e| format!("--shadowmap-res: {e}"))?),
-    };
     let (sc, camera) = load_frame(scene, frame, size)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
-    let mut shader: Box<dyn IndirectShader> = match v.shading {
-        ShadingArg::Exhaustive => Box::new(vpl_shading::ExhaustiveShader { clamp }),
-        ShadingArg::Interleaved => {
-            let mut s = vpl_shading::InterleavedShader::new(clamp, seed);
-            if v.no_filter {
-                s.filter = None;
-            }
-            Box::new(s)
-        }
-    };
-    let settings = vpl_shading::FrameSettings {
-        mode: mode_of(mode),
-        max_depth,
-        direct_samples: v.direct_samples,
-        seed,
-        index: frame as u64,
-        time: frame as f32 / 30.0,
-    };
-    let r = pool.install(|| vpl_shading::render_frame(&sc, &camera, settings, sampler.as_mut(), vis.as_mut(), shader.as_mut()));
+    let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
+    let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0));
     r.image.write_exr(out).map_err(|e| e.to_string())?;
     r.image.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
     if !quiet {
@@ -542,7 +669,7 @@ fn render_vpl(
             eprintln!("vpl: {}", r.sampler_report);
             eprintln!(
                 "vpl: visibility {}: {} maps rebuilt, {:.1} MiB; clamp {}",
-                vis.name(),
+                p.visibility.name(),
                 r.visibility.rebuilt,
                 r.visibility.memory_bytes as f64 / (1 << 20) as f64,
                 clamp.map_or("off".to_string(), |c| format!("G_max = {:.3} 1/m^2", c.g_max))
@@ -557,7 +684,7 @@ fn render_vpl(
             t.gbuffer_ms,
             t.sampling_ms,
             t.visibility_ms,
-            shader.name(),
+            p.shader.name(),
             t.shading_ms,
             t.direct_ms,
             m[0],

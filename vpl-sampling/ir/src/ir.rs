@@ -38,11 +38,15 @@ pub struct IrConfig {
     pub bounces: u32,
     /// Random or Halton light paths.
     pub sampling: PathSampling,
+    /// New light paths every frame (the frame index enters the streams and
+    /// the Halton rotation): IR as the papers compare it, flickering even in
+    /// a static scene. Off: a static scene keeps its VPLs.
+    pub fresh_paths: bool,
 }
 
 impl Default for IrConfig {
     fn default() -> Self {
-        IrConfig { vpls: 2048, bounces: 3, sampling: PathSampling::Random }
+        IrConfig { vpls: 2048, bounces: 3, sampling: PathSampling::Random, fresh_paths: false }
     }
 }
 
@@ -109,10 +113,17 @@ impl InstantRadiosity {
         self.stats
     }
 
-    /// Samples the VPLs of `scene` with `seed` (what [`VplSampler::next_frame`]
-    /// does with the frame's scene and seed).
+    /// Samples the VPLs of `scene` with `seed`, as frame 0.
     pub fn sample(&mut self, scene: &Scene, seed: u64) -> &VplSet {
-        let IrConfig { vpls, bounces, sampling } = self.config;
+        self.sample_frame(scene, seed, 0)
+    }
+
+    /// Samples the VPLs of frame `index` of `scene` with `seed` (what
+    /// [`VplSampler::next_frame`] does); the index matters only with
+    /// [`IrConfig::fresh_paths`].
+    pub fn sample_frame(&mut self, scene: &Scene, seed: u64, index: u64) -> &VplSet {
+        let IrConfig { vpls, bounces, sampling, fresh_paths } = self.config;
+        let frame = if fresh_paths { index } else { 0 };
         let plan = path_plan(vpls, bounces, mean_albedo(scene));
         let offsets: Vec<usize> = plan.iter().scan(0, |acc, &n| {
             let o = *acc;
@@ -120,10 +131,10 @@ impl InstantRadiosity {
             Some(o)
         }).collect();
         let n_paths = plan.first().copied().unwrap_or(0);
-        let halton = (sampling == PathSampling::Halton).then(|| Halton::new(dims(bounces), seed));
+        let halton = (sampling == PathSampling::Halton).then(|| Halton::new(dims(bounces), seed.wrapping_add(frame.wrapping_mul(0x9E37_79B9_7F4A_7C15))));
         let paths: Vec<Vec<(usize, Vpl)>> = (0..n_paths)
             .into_par_iter()
-            .map(|i| trace_path(scene, i, &plan, &offsets, seed, halton.as_ref()))
+            .map(|i| trace_path(scene, i, &plan, &offsets, (seed, frame), halton.as_ref()))
             .collect();
         self.set.begin_frame();
         let mut filled = vec![None; vpls];
@@ -147,7 +158,7 @@ impl VplSampler for InstantRadiosity {
     }
 
     fn next_frame(&mut self, frame: &Frame) -> &VplSet {
-        self.sample(frame.scene, frame.seed)
+        self.sample_frame(frame.scene, frame.seed, frame.index)
     }
 
     fn report(&self) -> String {
@@ -199,8 +210,8 @@ pub fn path_plan(budget: usize, bounces: u32, rho: f32) -> Vec<usize> {
 }
 
 /// Light path `i`: the VPLs it stores, with their slots.
-fn trace_path(scene: &Scene, i: usize, plan: &[usize], offsets: &[usize], seed: u64, halton: Option<&Halton>) -> Vec<(usize, Vpl)> {
-    let mut rng = stream(seed, 0, Purpose::LIGHT_PATH, i as u64);
+fn trace_path(scene: &Scene, i: usize, plan: &[usize], offsets: &[usize], (seed, frame): (u64, u64), halton: Option<&Halton>) -> Vec<(usize, Vpl)> {
+    let mut rng = stream(seed, frame, Purpose::LIGHT_PATH, i as u64);
     let mut dim = 0usize;
     let mut next = || -> f32 {
         let u = match halton {
@@ -270,7 +281,7 @@ mod tests {
     fn static_scene_gives_the_same_vpls_and_no_changes() {
         let scene = SceneSetup::load("cornell").unwrap().scene;
         for sampling in [PathSampling::Random, PathSampling::Halton] {
-            let mut ir = InstantRadiosity::new(IrConfig { vpls: 512, bounces: 3, sampling }).unwrap();
+            let mut ir = InstantRadiosity::new(IrConfig { vpls: 512, bounces: 3, sampling, fresh_paths: false }).unwrap();
             let a = ir.sample(&scene, 5).clone();
             assert_eq!(a.changed_count(), a.stored());
             let b = ir.sample(&scene, 5);
@@ -280,13 +291,19 @@ mod tests {
             assert_eq!(s.stored + s.lost, s.planned);
             // The closed box loses paths only through the light's back and the box's open front.
             assert!(s.stored as f32 > 0.7 * s.planned as f32, "{s:?}");
+            // With fresh paths, the next frame's VPLs are new ones.
+            let mut fresh = InstantRadiosity::new(IrConfig { vpls: 512, bounces: 3, sampling, fresh_paths: true }).unwrap();
+            let f0 = fresh.sample_frame(&scene, 5, 0).clone();
+            assert!(f0.slots() == a.slots(), "frame 0 of fresh paths differs from fixed paths");
+            let f1 = fresh.sample_frame(&scene, 5, 1);
+            assert!(f1.moved_count() > 400, "only {} slots moved", f1.moved_count());
         }
     }
 
     #[test]
     fn bounce_counts_follow_the_plan() {
         let scene = SceneSetup::load("cornell").unwrap().scene;
-        let mut ir = InstantRadiosity::new(IrConfig { vpls: 1000, bounces: 2, sampling: PathSampling::Halton }).unwrap();
+        let mut ir = InstantRadiosity::new(IrConfig { vpls: 1000, bounces: 2, sampling: PathSampling::Halton, fresh_paths: false }).unwrap();
         let set = ir.sample(&scene, 1);
         let plan = path_plan(1000, 2, mean_albedo(&scene));
         let b1 = set.iter().filter(|(_, v)| v.bounce == 1).count();

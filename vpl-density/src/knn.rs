@@ -1,0 +1,173 @@
+//! The k-nearest-neighbour density estimator of eq. (7).
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use std::f32::consts::PI;
+use std::num::NonZero;
+use vpl_core::glam::Vec3;
+
+/// Errors of [`KnnDensity`].
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum DensityError {
+    /// A point has a NaN or infinite coordinate.
+    #[error("point {0} has a non-finite coordinate")]
+    NonFinite(usize),
+    /// k must be at least 1.
+    #[error("k must be at least 1")]
+    ZeroK,
+    /// There are fewer points than the query needs neighbours.
+    #[error("{needed} neighbours asked of a set of {points} points")]
+    TooFewPoints {
+        /// Neighbours the query needs.
+        needed: usize,
+        /// Points in the set.
+        points: usize,
+    },
+}
+
+/// `k = max(1, ⌊√(I/32)⌋)`, the neighbour count for the densities of
+/// rendered VPLs (eq. 8): consistent, since k → ∞ and k/I → 0 as I grows.
+pub fn rendering_k(budget: usize) -> usize {
+    (((budget as f64) / 32.0).sqrt().floor() as usize).max(1)
+}
+
+/// A point set with a k-d tree over it, answering eq. (7).
+pub struct KnnDensity {
+    points: Vec<[f32; 3]>,
+    tree: Option<ImmutableKdTree<f32, 3>>,
+}
+
+impl std::fmt::Debug for KnnDensity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("KnnDensity").field("points", &self.points.len()).finish()
+    }
+}
+
+impl KnnDensity {
+    /// Builds the tree over `points` (an empty set is allowed; its queries fail).
+    pub fn new(points: &[Vec3]) -> Result<KnnDensity, DensityError> {
+        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+            return Err(DensityError::NonFinite(i));
+        }
+        let points: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
+        let tree = if points.is_empty() {
+            None
+        } else {
+            // Only fails on an empty slice.
+            ImmutableKdTree::new_from_slice(&points).ok()
+        };
+        Ok(KnnDensity { points, tree })
+    }
+
+    /// Number of points N.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Squared distance from `q` to its `k`-th nearest point of the set.
+    pub fn radius_sq(&self, q: Vec3, k: usize) -> Result<f32, DensityError> {
+        let k = NonZero::new(k).ok_or(DensityError::ZeroK)?;
+        if k.get() > self.points.len() {
+            return Err(DensityError::TooFewPoints { needed: k.get(), points: self.points.len() });
+        }
+        Ok(self.kth(&q.to_array(), k))
+    }
+
+    fn kth(&self, q: &[f32; 3], k: NonZero<usize>) -> f32 {
+        let tree = self.tree.as_ref().expect("a non-empty set has a tree");
+        if k.get() == 1 {
+            return tree.query(q).nearest_one::<SquaredEuclidean<f32>>().execute().distance;
+        }
+        let r = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(k).execute();
+        r.last().map_or(f32::INFINITY, |n| n.distance)
+    }
+
+    /// Density of the set at `q` from its `k` nearest points:
+    /// `k / (N π r_k²)` (eq. 7). Infinite when `q` sits on k points.
+    pub fn at(&self, q: Vec3, k: usize) -> Result<f32, DensityError> {
+        let r2 = self.radius_sq(q, k)?;
+        Ok(density(k, self.points.len(), r2))
+    }
+
+    /// [`KnnDensity::at`] for many points, in parallel; an empty set or too
+    /// large a `k` gives an error.
+    pub fn at_many(&self, qs: &[Vec3], k: usize) -> Result<Vec<f32>, DensityError> {
+        let kk = NonZero::new(k).ok_or(DensityError::ZeroK)?;
+        if k > self.points.len() {
+            return Err(DensityError::TooFewPoints { needed: k, points: self.points.len() });
+        }
+        let n = self.points.len();
+        Ok(qs.par_iter().map(|q| density(k, n, self.kth(&q.to_array(), kk))).collect())
+    }
+
+    /// Squared distance from every point of the set to its `k`-th nearest
+    /// *other* point (the point itself is not its own neighbour), in the
+    /// order the points were given. A set of at most `k` points gives
+    /// infinite radii (no k-th neighbour exists).
+    pub fn member_radii_sq(&self, k: usize) -> Vec<f32> {
+        let n = self.points.len();
+        let Some(kk) = NonZero::new(k + 1).filter(|kk| kk.get() <= n) else {
+            return vec![f32::INFINITY; n];
+        };
+        self.points.par_iter().map(|q| self.kth(q, kk)).collect()
+    }
+
+    /// Density at every point of the set from its `k` nearest other points,
+    /// `k / (N π r_k²)`; zero for a set too small to have k other points.
+    pub fn members(&self, k: usize) -> Vec<f32> {
+        let n = self.points.len();
+        self.member_radii_sq(k).into_iter().map(|r2| density(k, n, r2)).collect()
+    }
+}
+
+/// `k / (n π r²)`: infinite at r = 0, zero at r = ∞.
+#[inline]
+fn density(k: usize, n: usize, r2: f32) -> f32 {
+    k as f32 / (n as f32 * PI * r2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rendering_k_follows_eq_8() {
+        assert_eq!(rendering_k(1), 1);
+        assert_eq!(rendering_k(32), 1);
+        assert_eq!(rendering_k(128), 2);
+        assert_eq!(rendering_k(2048), 8);
+        assert_eq!(rendering_k(8192), 16);
+        assert_eq!(rendering_k(40_000), 35);
+    }
+
+    #[test]
+    fn distances_on_a_line() {
+        let pts: Vec<Vec3> = (0..5).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        let d = KnnDensity::new(&pts).unwrap();
+        assert_eq!(d.radius_sq(Vec3::new(0.2, 0.0, 0.0), 1).unwrap(), 0.2f32 * 0.2);
+        assert_eq!(d.radius_sq(Vec3::new(0.2, 0.0, 0.0), 3).unwrap(), 1.8f32 * 1.8);
+        // Members exclude themselves: the end point's 2nd neighbour is 2 away.
+        let r = d.member_radii_sq(2);
+        assert_eq!(r, vec![4.0, 1.0, 1.0, 1.0, 4.0]);
+        let p = d.members(1);
+        assert!((p[2] - 1.0 / (5.0 * PI)).abs() < 1e-7);
+        assert!(d.member_radii_sq(5).iter().all(|r| r.is_infinite()));
+        assert_eq!(d.members(5), vec![0.0; 5]);
+    }
+
+    #[test]
+    fn errors_are_typed() {
+        assert_eq!(KnnDensity::new(&[Vec3::NAN]).unwrap_err(), DensityError::NonFinite(0));
+        let d = KnnDensity::new(&[Vec3::ZERO]).unwrap();
+        assert_eq!(d.at(Vec3::ONE, 0).unwrap_err(), DensityError::ZeroK);
+        assert_eq!(d.at(Vec3::ONE, 2).unwrap_err(), DensityError::TooFewPoints { needed: 2, points: 1 });
+        let e = KnnDensity::new(&[]).unwrap();
+        assert!(e.is_empty() && e.at(Vec3::ONE, 1).is_err() && e.at_many(&[Vec3::ONE], 1).is_err());
+        assert!(e.members(1).is_empty());
+    }
+}

@@ -1,0 +1,92 @@
+//! Settings of the SMC sampler, with the paper's defaults.
+
+use vpl_density::rendering_k;
+
+/// Settings of [`crate::SmcSampler`]. The defaults are the paper's (§3.2, §4):
+/// I = 2048, M_max = 16, 16:1 resampling with at most 8 retries, 16 radiosity
+/// paths, k from eq. (8), 100 warm-up iterations, V = 16 visibility rays in
+/// two iterations, and the 95 % quantile of eq. (9).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmcConfig {
+    /// The VPL budget I.
+    pub vpls: usize,
+    /// M_max: VPLs allowed to move per frame (line 13 of Algorithm 1).
+    pub m_max: usize,
+    /// Ray hits per candidate: 16·I hits are resampled to I candidates (§3.2.1).
+    pub resample_ratio: usize,
+    /// Retries of a resampling draw that lands on a hit already taken.
+    pub max_retries: u32,
+    /// Paths per radiosity estimate (§3.2.3).
+    pub radiosity_paths: u32,
+    /// Scattering vertices after y in those paths: `max_depth − 3`
+    /// (2 for three indirect bounces).
+    pub radiosity_bounces: u32,
+    /// k of the densities that weight rendered VPLs; `None`: eq. (8),
+    /// `max(1, ⌊√(I/32)⌋)`.
+    pub knn_k: Option<usize>,
+    /// Iterations run before the first frame.
+    pub warmup: u32,
+    /// V: rays toward each VPL whose mailbox point the camera lost, per iteration (§3.2.2).
+    pub visibility_rays: usize,
+    /// Iterations of those rays per frame.
+    pub visibility_iterations: u32,
+    /// Candidates stronger than this quantile of the VPL intensities are
+    /// counted as M_strong (eq. 9).
+    pub strong_quantile: f32,
+}
+
+impl Default for SmcConfig {
+    fn default() -> Self {
+        SmcConfig {
+            vpls: 2048,
+            m_max: 16,
+            resample_ratio: 16,
+            max_retries: 8,
+            radiosity_paths: 16,
+            radiosity_bounces: 2,
+            knn_k: None,
+            warmup: 100,
+            visibility_rays: 16,
+            visibility_iterations: 2,
+            strong_quantile: 0.95,
+        }
+    }
+}
+
+impl SmcConfig {
+    /// The k of rendered VPLs' densities: the configured one or eq. (8).
+    pub fn k(&self) -> usize {
+        self.knn_k.unwrap_or_else(|| rendering_k(self.vpls))
+    }
+
+    /// Checks the settings.
+    pub fn validate(&self) -> Result<(), SmcError> {
+        if self.vpls == 0 {
+            return Err(SmcError::Invalid("the VPL budget must be at least 1"));
+        }
+        if self.resample_ratio == 0 {
+            return Err(SmcError::Invalid("the resample ratio must be at least 1"));
+        }
+        if self.radiosity_paths == 0 {
+            return Err(SmcError::Invalid("radiosity needs at least 1 path"));
+        }
+        if self.knn_k == Some(0) {
+            return Err(SmcError::Invalid("k must be at least 1"));
+        }
+        if !(self.strong_quantile > 0.0 && self.strong_quantile <= 1.0) {
+            return Err(SmcError::Invalid("the strong quantile must be in (0, 1]"));
+        }
+        if self.vpls.checked_mul(self.resample_ratio).is_none_or(|n| n > 1 << 28) {
+            return Err(SmcError::Invalid("I times the resample ratio must be at most 2^28"));
+        }
+        Ok(())
+    }
+}
+
+/// Errors of [`crate::SmcSampler::new`].
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum SmcError {
+    /// A setting is out of range.
+    #[error("invalid SMC settings: {0}")]
+    Invalid(&'static str),
+}

@@ -1,0 +1,56 @@
+//! # vpl-smc
+//!
+//! Sequential Monte Carlo Instant Radiosity (Hedman, Karras, Lehtinen,
+//! I3D 2016 / TVCG 2017): VPLs kept on the surfaces the camera sees
+//! indirectly, distributed toward their radiosity (p(y) ∝ L(y), eq. 4), and
+//! evolved from frame to frame by replacing at most M_max of them, so the
+//! image is stable in time.
+//!
+//! Every line of Algorithm 1 is here ([`SmcSampler::iterate`]):
+//!
+//! 1. camera points X, cast through random raster positions;
+//! 2. indirect visibility by mailboxing (§3.2.2): a VPL stays valid while the
+//!    camera sees the point it was found from; otherwise V = 16 rays from
+//!    random points of X try to verify it, in two rounds;
+//! 3. candidates (§3.2.1): one cosine-distributed ray from every point of X
+//!    (16·I rays), the hits weighted by 1/p̂ (k = 1 among the hits) and
+//!    resampled without replacement down to I candidates, at most 8 retries a draw;
+//! 4. candidate radiosities L(ŷ) from 16 path-traced NEE paths seeded by the
+//!    id the candidate keeps as a VPL (§3.2.3), and densities against the
+//!    current VPLs with k = 1 (§3.2.4);
+//! 5. M_min = min(M_max, M_strong) (eq. 9); the M_min weakest valid VPLs are
+//!    invalidated when fewer are unverified; at most M_max are removed and
+//!    the strongest candidates fill the free slots;
+//! 6. the set's densities with k = max(1, ⌊√(I/32)⌋) (eq. 8) and its
+//!    radiosities (anew only when the lights changed), and the output flux
+//!    L / (I·p) in vpl-core's convention.
+//!
+//! The first frame runs 100 warm-up iterations. Only replaced slots move
+//! ([`VplSet::moved`](vpl_core::VplSet::moved)), so shadow maps update
+//! lazily; re-weighted VPLs change flux but keep their maps.
+//!
+//! ```
+//! use vpl_core::{Frame, GBuffer, SceneSetup, VplSampler};
+//! use vpl_smc::{SmcConfig, SmcSampler};
+//!
+//! let setup = SceneSetup::load("cornell").unwrap();
+//! let camera = setup.camera.with_resolution((64, 64)).unwrap();
+//! let gbuffer = GBuffer::empty();
+//! let frame = |index| Frame { scene: &setup.scene, camera: &camera, time: 0.0, index, seed: 1, gbuffer: &gbuffer, previous: None };
+//! let mut smc = SmcSampler::new(SmcConfig { vpls: 128, warmup: 4, ..SmcConfig::default() }).unwrap();
+//! assert_eq!(smc.next_frame(&frame(0)).stored(), 128);
+//! let moved = smc.next_frame(&frame(1)).moved_count();
+//! assert!(moved <= 16, "{moved} VPLs moved");
+//! ```
+
+#![warn(missing_docs)]
+
+mod config;
+mod points;
+mod resample;
+mod sampler;
+
+pub use config::{SmcConfig, SmcError};
+pub use points::{camera_points, camera_sees, candidate_hits, mutually_visible, CameraPoint, CandidateHit};
+pub use resample::resample;
+pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};

@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 use std::path::PathBuf;
+use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, Scene, VplSet, VplVisibility};
 
 /// The folder of test data shipped with the repository (`tests/data`).
 pub fn data_dir() -> PathBuf {
@@ -23,4 +24,18 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/test-output").join(name);
     std::fs::create_dir_all(&d).expect("create scratch dir");
     d
+}
+
+/// Every VPL of `set` at every pixel of `gbuf`, with exact (ray-traced)
+/// visibility: the reference form of VPL shading.
+pub fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<GeometryClamp>) -> Image {
+    let mut vis = vpl_visibility::RayTraced::default();
+    vis.update(scene, set);
+    vpl_shading::ExhaustiveShader { clamp }.shade(gbuf, set, &vis)
+}
+
+/// Mitsuba's indirect reference of `cornell` (256×256) box-filtered to 64×64.
+pub fn mitsuba_indirect_64() -> Image {
+    let full = Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).expect("the Mitsuba indirect reference");
+    vpl_bench::metrics::downsample(&full, 4).expect("256 is a multiple of 4")
 }

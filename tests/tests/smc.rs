@@ -7,14 +7,14 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
-use vpl_bench::metrics::{downsample, rel_mse};
+use vpl_bench::metrics::rel_mse;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, GeometryClamp, Image, IndirectShader, Scene, SceneSetup, VplSet, VplVisibility};
+use vpl_core::{Camera, GeometryClamp, Image, Scene, SceneSetup, VplSet};
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
-use vpl_shading::{render_gbuffer, ExhaustiveShader, InterleavedShader};
+use vpl_shading::{render_gbuffer, InterleavedShader};
 use vpl_smc::{mutually_visible, CameraPoint, SmcConfig, SmcSampler};
-use vpl_tests::data_dir;
-use vpl_visibility::{RayTraced, ShadowMaps};
+use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
+use vpl_visibility::ShadowMaps;
 
 fn smc(vpls: usize, warmup: u32) -> SmcSampler {
     SmcSampler::new(SmcConfig { vpls, warmup, ..SmcConfig::default() }).unwrap()
@@ -204,16 +204,13 @@ fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
     let camera = setup.camera.with_resolution((64, 64)).unwrap();
     let scene = &setup.scene;
     let gbuf = render_gbuffer(scene, &camera);
-    let reference = downsample(&Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).unwrap(), 4).unwrap();
+    let reference = mitsuba_indirect_64();
     let ref_mean = reference.mean();
     let mut errors = Vec::new();
     for vpls in [2048, 8192, 40_000] {
         let t = std::time::Instant::now();
         let s = warmed(scene, &setup.camera, vpls, 10, 7);
-        let set = s.vpls();
-        let mut vis = RayTraced::default();
-        vis.update(scene, set);
-        let img = ExhaustiveShader { clamp: None }.shade(&gbuf, set, &vis);
+        let img = exhaustive_rt(scene, &gbuf, s.vpls(), None);
         let e = rel_mse(&img, &reference).unwrap();
         let m = img.mean();
         eprintln!("I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5}), {:.1} s", m[0], m[1], m[2], ref_mean[0], ref_mean[1], ref_mean[2], t.elapsed().as_secs_f32());
@@ -250,9 +247,7 @@ fn newly_visible_rooms_fill_within_frames() {
     assert!(room_px.len() > size.0 as usize * size.1 as usize / 5, "the room fills too little of the view");
     let clamp = Some(GeometryClamp::for_budget(1024, scene.surface_area()));
     let room_light = |set: &VplSet| {
-        let mut vis = RayTraced::default();
-        vis.update(scene, set);
-        let img = ExhaustiveShader { clamp }.shade(&gbuf, set, &vis);
+        let img = exhaustive_rt(scene, &gbuf, set, clamp);
         room_px.iter().map(|&i| vpl_core::image::luminance(img.data[i]) as f64).sum::<f64>()
     };
     let share = |set: &VplSet| set.iter().filter(|(_, v)| in_room(v.y)).count() as f64 / set.stored() as f64;

@@ -3,13 +3,13 @@
 //! against exhaustive (c), clamped VPLs against the clamped path tracer (d),
 //! lazy shadow-map updates (e). Fixed seeds; every bound is stated with its reason.
 
-use vpl_bench::metrics::{downsample, rel_mse};
+use vpl_bench::metrics::rel_mse;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, GBuffer, GeometryClamp, Image, IndirectShader, Scene, SceneSetup, VplSet, VplVisibility};
+use vpl_core::{Camera, GeometryClamp, IndirectShader, Scene, SceneSetup, VplSet, VplVisibility};
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
 use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
 use vpl_shading::{render_gbuffer, ExhaustiveShader, InterleavedShader};
-use vpl_tests::data_dir;
+use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 fn cornell(size: u32) -> (Scene, Camera) {
@@ -20,12 +20,6 @@ fn cornell(size: u32) -> (Scene, Camera) {
 
 fn ir(scene: &Scene, vpls: usize, seed: u64) -> VplSet {
     InstantRadiosity::new(IrConfig { vpls, bounces: 3, sampling: PathSampling::Random, fresh_paths: false }).unwrap().sample(scene, seed).clone()
-}
-
-fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<GeometryClamp>) -> Image {
-    let mut vis = RayTraced::default();
-    vis.update(scene, set);
-    ExhaustiveShader { clamp }.shade(gbuf, set, &vis)
 }
 
 /// (a) IR, ray-traced visibility, exhaustive shading, no clamp, depth 5 on
@@ -44,8 +38,7 @@ fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<Geom
 fn a_instant_radiosity_converges_to_the_mitsuba_indirect_reference() {
     let (scene, camera) = cornell(64);
     let gbuf = render_gbuffer(&scene, &camera);
-    let reference = Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).unwrap();
-    let reference = downsample(&reference, 4).unwrap();
+    let reference = mitsuba_indirect_64();
     let ref_mean = reference.mean();
     let mut errors = Vec::new();
     for vpls in [4096, 16384, 65536] {

@@ -17,7 +17,7 @@ pub enum SequenceError {
     #[error(transparent)]
     Core(#[from] CoreError),
     /// The frame range does not fit the sequence.
-    #[error("frames {start}..{end} do not fit the sequence of {count} frames")]
+    #[error("frames {start}..{end} does not fit the sequence of {count} frames")]
     Frames {
         /// First frame asked for.
         start: u32,
@@ -48,6 +48,16 @@ pub struct SequenceFrame {
     pub rebuilt: usize,
 }
 
+/// Checks that `frames` is a non-empty range inside `setup`'s sequence (a
+/// scene without one has frame 0 only).
+pub fn check_frames(setup: &SceneSetup, frames: &Range<u32>) -> Result<(), SequenceError> {
+    let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
+    if frames.start >= frames.end || frames.end > count {
+        return Err(SequenceError::Frames { start: frames.start, end: frames.end, count });
+    }
+    Ok(())
+}
+
 /// Eight pixels spread over a `w`×`h` image: a ring of six around the
 /// centre at a third of the half-size, plus the centre and a point low in
 /// the image (where floors are).
@@ -75,10 +85,7 @@ pub fn run_sequence(
     out: Option<(&Path, f32)>,
     on_frame: &mut dyn FnMut(&SequenceFrame, &Image),
 ) -> Result<Vec<SequenceFrame>, SequenceError> {
-    let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    if frames.start >= frames.end || frames.end > count {
-        return Err(SequenceError::Frames { start: frames.start, end: frames.end, count });
-    }
+    check_frames(setup, &frames)?;
     let fps = setup.sequence.as_ref().map_or(30.0, |s| s.fps);
     let mut done = Vec::with_capacity(frames.len());
     for f in frames {

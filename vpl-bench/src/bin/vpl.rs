@@ -468,9 +468,7 @@ fn run(cli: Cli) -> Res<()> {
             }
             let count = setup.sequence.as_ref().map_or(1, |q| q.frame_count());
             let range = frames.unwrap_or(FramesArg { start: 0, end: None }).range(count);
-            if range.start >= range.end || range.end > count {
-                return Err(format!("--frames {}..{} does not fit the sequence of {count} frames", range.start, range.end));
-            }
+            vpl_bench::sequence::check_frames(&setup, &range).map_err(|e| format!("--{e}"))?;
             let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
             let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
             let res = match size {

@@ -158,7 +158,7 @@ fn static_frames(sampler: &mut dyn vpl_core::VplSampler, n: u64) -> (Vec<Image>,
     let mut images = Vec::new();
     let mut rebuilt = Vec::new();
     for index in 0..n {
-        let r = vpl_shading::render_frame(&setup.scene, &camera, vpl_shading::FrameSettings { index, ..s }, sampler, &mut vis, &mut shader);
+        let r = vpl_shading::render_frame(&setup.scene, &camera, vpl_shading::FrameSettings { index, ..s }, None, sampler, &mut vis, &mut shader);
         images.push(r.image);
         rebuilt.push(r.visibility.rebuilt);
     }

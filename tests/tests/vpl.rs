@@ -194,7 +194,7 @@ fn vpl_frames_are_bit_identical_across_thread_counts() {
             let mut vis = ShadowMaps::new(32).unwrap();
             let mut shader = InterleavedShader::new(Some(GeometryClamp::for_budget(300, scene.surface_area())), 7);
             let s = vpl_shading::FrameSettings { seed: 7, ..vpl_shading::FrameSettings::default() };
-            vpl_shading::render_frame(&scene, &camera, s, &mut sampler, &mut vis, &mut shader).image
+            vpl_shading::render_frame(&scene, &camera, s, None, &mut sampler, &mut vis, &mut shader).image
         })
     };
     let (a, b) = (frame(1), frame(2));

@@ -1,7 +1,7 @@
 //! A VPL renderer assembled from names and settings: sampler, visibility,
 //! shader. What `vpl render --method vpl` and `vpl sequence` run.
 
-use vpl_core::{Camera, GeometryClamp, IndirectShader, Mode, Scene, VplSampler, VplVisibility};
+use vpl_core::{Camera, GeometryClamp, Image, IndirectShader, Mode, Scene, VplSampler, VplVisibility};
 use vpl_sampling::SamplerConfig;
 use vpl_shading::{ExhaustiveShader, FrameOutput, FrameSettings, InterleavedShader};
 use vpl_visibility::{RayTraced, ShadowMaps};
@@ -59,6 +59,8 @@ pub struct Pipeline {
     pub visibility: Box<dyn VplVisibility>,
     /// The shader.
     pub shader: Box<dyn IndirectShader>,
+    /// The indirect image of the last frame, which the next frame's sampler reads.
+    pub previous: Option<Image>,
 }
 
 impl Pipeline {
@@ -82,7 +84,7 @@ impl Pipeline {
                 Box::new(s)
             }
         };
-        Ok(Pipeline { spec, sampler, visibility, shader })
+        Ok(Pipeline { spec, sampler, visibility, shader, previous: None })
     }
 
     /// Renders frame `index` (at `time` seconds) of `scene` seen by `camera`.
@@ -95,6 +97,8 @@ impl Pipeline {
             index,
             time,
         };
-        vpl_shading::render_frame(scene, camera, settings, self.sampler.as_mut(), self.visibility.as_mut(), self.shader.as_mut())
+        let out = vpl_shading::render_frame(scene, camera, settings, self.previous.as_ref(), self.sampler.as_mut(), self.visibility.as_mut(), self.shader.as_mut());
+        self.previous = out.indirect.clone();
+        out
     }
 }

@@ -32,7 +32,17 @@ impl Scene {
         if p_select <= 0.0 {
             return None;
         }
-        let (ray, beta) = match &self.lights[i] {
+        let e = self.emit_from(i, u_pos, u_dir)?;
+        Some(EmittedRay { beta: e.beta / p_select, ..e })
+    }
+
+    /// A ray leaving light `i` (no selection): a point (`u_pos`) and a
+    /// direction (`u_dir`) as in [`Scene::sample_emission`]; the power
+    /// weight's mean over uniform `u_pos`, `u_dir` is the power of light `i`
+    /// alone. Reflective shadow maps index it by (`u_pos`, `u_dir`).
+    /// `None` when the sample carries nothing or `i` is out of range.
+    pub fn emit_from(&self, i: usize, u_pos: (f32, f32), u_dir: (f32, f32)) -> Option<EmittedRay> {
+        let (ray, beta) = match self.lights.get(i)? {
             Light::Area { triangle, radiance } => {
                 let t = &self.geometry.triangles[*triangle as usize];
                 let (b1, b2) = uniform_triangle(u_pos.0, u_pos.1);
@@ -64,10 +74,10 @@ impl Scene {
                 (Ray::new(o, *direction), *irradiance * (PI * r * r))
             }
         };
-        if beta.max_element() <= 0.0 {
+        if !(beta.max_element() > 0.0) {
             return None;
         }
-        Some(EmittedRay { ray, beta: beta / p_select, light: i })
+        Some(EmittedRay { ray, beta, light: i })
     }
 }
 

@@ -39,6 +39,14 @@ impl Purpose {
     pub const RESAMPLE: Purpose = Purpose(12);
     /// Indirect-visibility rays toward a VPL (index = VPL slot).
     pub const INDIRECT_VISIBILITY: Purpose = Purpose(13);
+    /// Russian-roulette acceptance of VPL candidates (index = candidate).
+    pub const ACCEPT: Purpose = Purpose(14);
+    /// Markov chains of Metropolis samplers (index = chain).
+    pub const CHAIN: Purpose = Purpose(15);
+    /// Independent (bootstrap or large-step) samples of a Metropolis sampler (index = sample).
+    pub const BOOTSTRAP: Purpose = Purpose(16);
+    /// Thinning a VPL set down to its budget (index 0).
+    pub const THIN: Purpose = Purpose(17);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

@@ -48,6 +48,23 @@ pub struct Geometry {
     pub degenerate: usize,
 }
 
+/// What a change of the light field is detected by: the scene's geometry
+/// (by identity), materials and lights. Samplers that cache light-dependent
+/// values (radiosities, reflective shadow maps) recompute them when it differs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightingKey {
+    geometry: usize,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+}
+
+impl LightingKey {
+    /// The key of `scene` as it is now.
+    pub fn of(scene: &Scene) -> LightingKey {
+        LightingKey { geometry: Arc::as_ptr(&scene.geometry) as usize, materials: scene.materials.clone(), lights: scene.lights.clone() }
+    }
+}
+
 /// A renderable scene.
 ///
 /// Geometry is shared (`Arc`) so that a frame of an animation can change the

@@ -8,7 +8,7 @@ use crate::gbuffer::{GBuffer, Receivers};
 use crate::image::Image;
 use crate::scene::Scene;
 use crate::surface::SurfacePoint;
-use crate::vpl::VplSet;
+use crate::vpl::{Vpl, VplSet};
 use glam::Vec3;
 
 /// Estimates the exitant radiance L(y) of a diffuse surface point (its radiosity
@@ -33,6 +33,20 @@ pub trait VplSampler: Send {
     fn next_frame(&mut self, frame: &Frame) -> &VplSet;
     /// One line of statistics about the last frame (stored VPLs, paths, …).
     fn report(&self) -> String;
+}
+
+/// A source of VPLs from light paths whose number is chosen per call, each
+/// set an unbiased estimate of the light field on its own (Instant
+/// Radiosity and the like). Samplers that thin or re-weight light-path VPLs
+/// (Russian-roulette acceptance) wrap one.
+pub trait LightPathGenerator: Send + Sync {
+    /// Short name (`ir`, …).
+    fn name(&self) -> &'static str;
+    /// VPLs for a budget of `budget` slots (fewer when paths leave the
+    /// scene), in the flux convention of [`crate::vpl`]: their sum over the
+    /// set estimates the light field without bias. `seed` and `frame` key
+    /// the random streams; `frame` is the caller's batch or frame number.
+    fn generate(&self, scene: &Scene, budget: usize, seed: u64, frame: u64) -> Vec<Vpl>;
 }
 
 /// What a visibility update did.

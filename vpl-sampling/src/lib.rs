@@ -1,7 +1,7 @@
 //! # vpl-sampling
 //!
 //! The facade over the toolkit's VPL samplers: one crate per method lives
-//! beside this one (`vpl-ir`, `vpl-smc`, …), and this crate re-exports them and keeps a
+//! beside this one (`vpl-ir`, `vpl-rr`, `vpl-mir`, `vpl-tcas`, `vpl-smc`), and this crate re-exports them and keeps a
 //! registry that builds any of them by name from one [`SamplerConfig`], so an
 //! experiment can swap samplers with a string.
 //!
@@ -24,4 +24,7 @@ mod registry;
 pub use registry::{build, SamplerConfig, SamplerEntry, SamplingError, PLANNED, SAMPLERS};
 pub use vpl_core::{VplSampler, VplSet};
 pub use vpl_ir::{InstantRadiosity, IrConfig, IrStats, PathSampling};
+pub use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
+pub use vpl_rr::{RrConfig, RrSampler, RrStats};
 pub use vpl_smc::{SmcConfig, SmcSampler, SmcStats, SmcTimings};
+pub use vpl_tcas::{TcasConfig, TcasSampler};

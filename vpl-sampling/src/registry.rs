@@ -2,7 +2,10 @@
 
 use vpl_core::VplSampler;
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
+use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
+use vpl_rr::{RrConfig, RrSampler};
 use vpl_smc::{SmcConfig, SmcSampler};
+use vpl_tcas::{TcasConfig, TcasSampler};
 
 /// What every sampler is built from. Fields a sampler does not use are ignored.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,11 +22,30 @@ pub struct SamplerConfig {
     /// The SMC sampler's settings; its `vpls` and `radiosity_bounces` are
     /// taken from `vpls` and `max_depth` above.
     pub smc: SmcConfig,
+    /// Russian-roulette acceptance (its `vpls` is taken from `vpls`); it
+    /// wraps IR with `sampling` and `fresh_paths` above.
+    pub rr: RrConfig,
+    /// Metropolis IR (`vpls` and `bounces` taken from above).
+    pub mir: MirConfig,
+    /// The resampling stand-in for MIR (`vpls` and `radiosity_bounces` taken from above).
+    pub mir_resample: MirResampleConfig,
+    /// TCAS (`vpls` taken from above; one bounce whatever the depth).
+    pub tcas: TcasConfig,
 }
 
 impl Default for SamplerConfig {
     fn default() -> Self {
-        SamplerConfig { vpls: 2048, max_depth: 5, sampling: PathSampling::Random, fresh_paths: false, smc: SmcConfig::default() }
+        SamplerConfig {
+            vpls: 2048,
+            max_depth: 5,
+            sampling: PathSampling::Random,
+            fresh_paths: false,
+            smc: SmcConfig::default(),
+            rr: RrConfig::default(),
+            mir: MirConfig::default(),
+            mir_resample: MirResampleConfig::default(),
+            tcas: TcasConfig::default(),
+        }
     }
 }
 
@@ -37,6 +59,14 @@ impl SamplerConfig {
     /// of `max_depth − 3` bounces after the VPL.
     pub fn smc_config(&self) -> SmcConfig {
         SmcConfig { vpls: self.vpls, radiosity_bounces: self.max_depth.saturating_sub(3), ..self.smc }
+    }
+
+    /// An error when the depth leaves no indirect light for VPLs (max depth < 3).
+    fn needs_indirect(&self, name: &'static str) -> Result<(), SamplingError> {
+        if self.max_depth < 3 {
+            return Err(SamplingError::Config(name, format!("max depth {} has no indirect light for VPLs to carry (at least 3)", self.max_depth)));
+        }
+        Ok(())
     }
 }
 
@@ -76,19 +106,57 @@ pub const SAMPLERS: &[SamplerEntry] = &[
         },
     },
     SamplerEntry {
+        name: "rr",
+        about: "Russian-roulette acceptance (Georgiev & Slusallek 2010): IR's VPLs kept in proportion to the light they bring the camera",
+        build: |c| {
+            c.needs_indirect("rr")?;
+            RrSampler::over_ir(RrConfig { vpls: c.vpls, ..c.rr }, c.bounces(), c.fresh_paths)
+                .map(|s| Box::new(s) as Box<dyn VplSampler>)
+                .map_err(|e| SamplingError::Config("rr", e.to_string()))
+        },
+    },
+    SamplerEntry {
+        name: "mir",
+        about: "Metropolis Instant Radiosity (Segovia et al. 2007): light paths by Metropolis-Hastings, VPLs of equal power to the camera",
+        build: |c| {
+            c.needs_indirect("mir")?;
+            MirSampler::new(MirConfig { vpls: c.vpls, bounces: c.bounces(), ..c.mir })
+                .map(|s| Box::new(s) as Box<dyn VplSampler>)
+                .map_err(|e| SamplingError::Config("mir", e.to_string()))
+        },
+    },
+    SamplerEntry {
+        name: "mir-resample",
+        about: "MIR as the SMC paper ran it: 256·I path-tracer camera paths resampled to I VPLs by the light they bring the camera",
+        build: |c| {
+            c.needs_indirect("mir-resample")?;
+            MirResampleSampler::new(MirResampleConfig { vpls: c.vpls, radiosity_bounces: c.max_depth.saturating_sub(3), ..c.mir_resample })
+                .map(|s| Box::new(s) as Box<dyn VplSampler>)
+                .map_err(|e| SamplingError::Config("mir-resample", e.to_string()))
+        },
+    },
+    SamplerEntry {
+        name: "tcas",
+        about: "Temporally coherent adaptive sampling (Barák et al. 2013): Metropolis chains over reflective shadow maps, one bounce",
+        build: |c| {
+            c.needs_indirect("tcas")?;
+            TcasSampler::new(TcasConfig { vpls: c.vpls, ..c.tcas })
+                .map(|s| Box::new(s) as Box<dyn VplSampler>)
+                .map_err(|e| SamplingError::Config("tcas", e.to_string()))
+        },
+    },
+    SamplerEntry {
         name: "smc",
         about: "Sequential Monte Carlo Instant Radiosity (Hedman et al. 2017): temporally coherent VPLs on indirectly visible surfaces",
         build: |c| {
-            if c.max_depth < 3 {
-                return Err(SamplingError::Config("smc", format!("max depth {} has no indirect light for VPLs to carry (at least 3)", c.max_depth)));
-            }
+            c.needs_indirect("smc")?;
             SmcSampler::new(c.smc_config()).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(|e| SamplingError::Config("smc", e.to_string()))
         },
     },
 ];
 
 /// Names of the samplers the toolkit plans but this build does not have.
-pub const PLANNED: &[&str] = &["rr", "mir", "mir-resample", "tcas"];
+pub const PLANNED: &[&str] = &[];
 
 /// Builds the sampler called `name`.
 pub fn build(name: &str, config: &SamplerConfig) -> Result<Box<dyn VplSampler>, SamplingError> {
@@ -108,7 +176,11 @@ mod tests {
     fn names_resolve_or_explain() {
         assert_eq!(build("ir", &SamplerConfig::default()).unwrap().name(), "ir");
         assert_eq!(build("smc", &SamplerConfig::default()).unwrap().name(), "smc");
-        assert!(matches!(build("tcas", &SamplerConfig::default()), Err(SamplingError::NotAvailable(..))));
+        for name in ["rr", "mir", "mir-resample", "tcas"] {
+            assert_eq!(build(name, &SamplerConfig::default()).unwrap().name(), name);
+            assert!(matches!(build(name, &SamplerConfig { max_depth: 2, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
+            assert!(matches!(build(name, &SamplerConfig { vpls: 0, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
+        }
         assert!(matches!(build("smc", &SamplerConfig { max_depth: 2, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
         let bad = SamplerConfig { smc: SmcConfig { resample_ratio: 0, ..SmcConfig::default() }, ..SamplerConfig::default() };
         assert!(matches!(build("smc", &bad), Err(SamplingError::Config(..))));

@@ -62,6 +62,9 @@ pub struct FrameOutput {
     pub moved: usize,
     /// The sampler's report line ("" when the mode needs no VPLs).
     pub sampler_report: String,
+    /// The indirect light the VPLs gave (`None` when the mode needs no
+    /// VPLs): what adaptive samplers read as the previous frame's image.
+    pub indirect: Option<Image>,
 }
 
 fn ms(t: Instant) -> f64 {
@@ -71,11 +74,15 @@ fn ms(t: Instant) -> f64 {
 /// Renders one frame: the G-buffer; then, when the mode and depth keep paths
 /// with ≥ 2 scattering vertices, the sampler's VPLs, the visibility update
 /// and indirect shading; then directly seen emission (k = 0) and direct
-/// light (k = 1) where the mode keeps them.
+/// light (k = 1) where the mode keeps them. `previous` is the indirect
+/// image of the previous frame ([`FrameOutput::indirect`]), which samplers
+/// that adapt to the image (Russian-roulette acceptance) read.
+#[allow(clippy::too_many_arguments)]
 pub fn render_frame(
     scene: &Scene,
     camera: &Camera,
     s: FrameSettings,
+    previous: Option<&Image>,
     sampler: &mut dyn VplSampler,
     vis: &mut dyn VplVisibility,
     shader: &mut dyn IndirectShader,
@@ -89,9 +96,10 @@ pub fn render_frame(
     let mut visibility = VisibilityUpdate::default();
     let mut sampler_report = String::new();
     let mut moved = 0;
+    let mut indirect = None;
     let (_, max_k) = s.mode.k_range(s.max_depth);
     if s.mode != Mode::Direct && max_k >= 2 {
-        let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous: None };
+        let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous };
         let t0 = Instant::now();
         let vpls = sampler.next_frame(&frame);
         t.sampling_ms = ms(t0);
@@ -103,6 +111,7 @@ pub fn render_frame(
         image = shader.shade(&gbuffer, vpls, vis);
         t.shading_ms = ms(t0);
         sampler_report = sampler.report();
+        indirect = Some(image.clone());
     }
     if s.mode.includes(0, s.max_depth) {
         for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
@@ -118,5 +127,5 @@ pub fn render_frame(
         }
     }
     t.total_ms = ms(start);
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, sampler_report }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, sampler_report, indirect }
 }

@@ -92,7 +92,7 @@ enum PathSamplingArg {
 /// Settings of `--method vpl`.
 #[derive(clap::Args)]
 struct VplArgs {
-    /// VPL sampler: ir or smc (rr, mir, mir-resample, tcas are planned).
+    /// VPL sampler: ir, rr, mir, mir-resample, tcas or smc.
     #[arg(long, default_value = "ir")]
     sampler: String,
     /// How light paths draw their numbers (ir).
@@ -104,18 +104,49 @@ struct VplArgs {
     /// SMC: VPLs allowed to move per frame (M_max).
     #[arg(long, default_value_t = 16)]
     m_max: usize,
-    /// SMC: candidate-ray hits per candidate (16 resamples 16·I hits to I candidates).
-    #[arg(long, default_value_t = 16)]
-    resample_ratio: usize,
-    /// SMC: path-traced paths per VPL radiosity estimate.
+    /// SMC: candidate-ray hits per candidate (default 16: 16·I hits to I candidates);
+    /// mir-resample: camera paths per VPL (default 256).
+    #[arg(long)]
+    resample_ratio: Option<usize>,
+    /// SMC, mir-resample: path-traced paths per VPL radiosity estimate.
     #[arg(long, default_value_t = 16)]
     radiosity_paths: u32,
-    /// SMC: k of the VPL densities (default max(1, floor(sqrt(I/32))), eq. 8).
+    /// SMC, mir-resample: k of the VPL densities (default max(1, floor(sqrt(I/32))), eq. 8).
     #[arg(long)]
     knn_k: Option<usize>,
     /// SMC: iterations before the first frame.
     #[arg(long, default_value_t = 100)]
     warmup: u32,
+    /// RR: epsilon of eq. (3), the least acceptance probability.
+    #[arg(long, default_value_t = 0.05)]
+    rr_epsilon: f32,
+    /// RR: estimate the image's indirect luminance from a pilot set on the first
+    /// frame (otherwise the first frame is plain IR, as in the paper).
+    #[arg(long)]
+    rr_pilot: bool,
+    /// RR, MIR, TCAS: camera samples the VPLs' importance is estimated against
+    /// (default 100 for rr and mir, 256 for tcas).
+    #[arg(long)]
+    camera_samples: Option<usize>,
+    /// TCAS: Metropolis-Hastings iterations per chain and frame (default 16);
+    /// MIR: steps between two recorded VPLs of a chain (default 4).
+    #[arg(long)]
+    mh_iterations: Option<u32>,
+    /// MIR: Markov chains run side by side.
+    #[arg(long, default_value_t = 64)]
+    mir_chains: usize,
+    /// MIR: probability of a large (independent) step.
+    #[arg(long, default_value_t = 0.3)]
+    mir_large_step: f32,
+    /// MIR: defensive share of the target for paths no camera sample sees.
+    #[arg(long, default_value_t = 0.05)]
+    mir_defensive: f32,
+    /// TCAS: texels per side of each light's reflective shadow map.
+    #[arg(long, default_value_t = 64)]
+    rsm_res: u32,
+    /// TCAS: further iterations on the first frame.
+    #[arg(long, default_value_t = 48)]
+    tcas_warmup: u32,
     /// VPL-to-pixel visibility.
     #[arg(long, value_enum, default_value_t = VisibilityArg::Shadowmap)]
     visibility: VisibilityArg,
@@ -599,9 +630,23 @@ fn pipeline_spec(v: &VplArgs, vpls: usize, max_depth: u32, mode: ModeArg, clamp:
         vpl_visibility::ShadowMaps::new(v.shadowmap_res).map_err(|e| format!("--shadowmap-res: {e}"))?;
     }
     let defaults = vpl_sampling::SmcConfig::default();
-    if v.resample_ratio == 0 || v.radiosity_paths == 0 || v.knn_k == Some(0) {
+    if v.resample_ratio == Some(0) || v.radiosity_paths == 0 || v.knn_k == Some(0) {
         return Err("--resample-ratio, --radiosity-paths and --knn-k must be at least 1".into());
     }
+    if v.camera_samples == Some(0) || v.mh_iterations == Some(0) || v.mir_chains == 0 {
+        return Err("--camera-samples, --mh-iterations and --mir-chains must be at least 1".into());
+    }
+    if !(v.rr_epsilon > 0.0 && v.rr_epsilon <= 1.0) {
+        return Err(format!("--rr-epsilon {} is outside (0, 1]", v.rr_epsilon));
+    }
+    if !(0.0..=1.0).contains(&v.mir_large_step) || !(v.mir_defensive >= 0.0 && v.mir_defensive.is_finite()) {
+        return Err("--mir-large-step must be in [0, 1] and --mir-defensive at least 0".into());
+    }
+    if !(1..=4096).contains(&v.rsm_res) {
+        return Err(format!("--rsm-res {} is outside 1..=4096", v.rsm_res));
+    }
+    let (rr, mir, mir_resample, tcas) =
+        (vpl_sampling::RrConfig::default(), vpl_sampling::MirConfig::default(), vpl_sampling::MirResampleConfig::default(), vpl_sampling::TcasConfig::default());
     let config = vpl_sampling::SamplerConfig {
         vpls,
         max_depth,
@@ -612,11 +657,33 @@ fn pipeline_spec(v: &VplArgs, vpls: usize, max_depth: u32, mode: ModeArg, clamp:
         fresh_paths: v.fresh_paths,
         smc: vpl_sampling::SmcConfig {
             m_max: v.m_max,
-            resample_ratio: v.resample_ratio,
+            resample_ratio: v.resample_ratio.unwrap_or(defaults.resample_ratio),
             radiosity_paths: v.radiosity_paths,
             knn_k: v.knn_k,
             warmup: v.warmup,
             ..defaults
+        },
+        rr: vpl_sampling::RrConfig { epsilon: v.rr_epsilon, camera_samples: v.camera_samples.unwrap_or(rr.camera_samples), pilot: v.rr_pilot, ..rr },
+        mir: vpl_sampling::MirConfig {
+            camera_samples: v.camera_samples.unwrap_or(mir.camera_samples),
+            chains: v.mir_chains,
+            mutations: v.mh_iterations.unwrap_or(mir.mutations),
+            large_step: v.mir_large_step,
+            defensive: v.mir_defensive,
+            ..mir
+        },
+        mir_resample: vpl_sampling::MirResampleConfig {
+            ratio: v.resample_ratio.unwrap_or(mir_resample.ratio),
+            radiosity_paths: v.radiosity_paths,
+            knn_k: v.knn_k,
+            ..mir_resample
+        },
+        tcas: vpl_sampling::TcasConfig {
+            rsm_res: v.rsm_res,
+            iterations: v.mh_iterations.unwrap_or(tcas.iterations),
+            warmup: v.tcas_warmup,
+            camera_samples: v.camera_samples.unwrap_or(tcas.camera_samples),
+            ..tcas
         },
     };
     Ok(PipelineSpec {

@@ -1,11 +1,10 @@
 //! The Instant Radiosity sampler.
 
-use crate::halton::Halton;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::light::channel_mean;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{stream, Frame, LocalFrame, Purpose, Ray, Scene, Vpl, VplSampler, VplSet};
+use vpl_core::{stream, Frame, Halton, LightPathGenerator, LocalFrame, Purpose, Ray, Scene, Vpl, VplSampler, VplSet};
 
 /// How light paths draw their numbers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -122,9 +121,28 @@ impl InstantRadiosity {
     /// [`VplSampler::next_frame`] does); the index matters only with
     /// [`IrConfig::fresh_paths`].
     pub fn sample_frame(&mut self, scene: &Scene, seed: u64, index: u64) -> &VplSet {
-        let IrConfig { vpls, bounces, sampling, fresh_paths } = self.config;
+        let vpls = self.config.vpls;
+        let batch = self.trace(scene, vpls, seed, index);
+        self.set.begin_frame();
+        let mut filled = vec![None; vpls];
+        for (slot, v) in batch.vpls {
+            filled[slot] = Some(v);
+        }
+        for (slot, v) in filled.into_iter().enumerate() {
+            self.set.set(slot, v);
+        }
+        self.set.light_paths = batch.light_paths as u64;
+        let stored = self.set.stored();
+        self.stats = IrStats { budget: vpls, planned: batch.planned, stored, light_paths: batch.light_paths, lost: batch.planned - stored };
+        &self.set
+    }
+
+    /// The light paths of a budget of `budget` slots for frame `index`
+    /// (which matters only with [`IrConfig::fresh_paths`]).
+    fn trace(&self, scene: &Scene, budget: usize, seed: u64, index: u64) -> Batch {
+        let IrConfig { bounces, sampling, fresh_paths, .. } = self.config;
         let frame = if fresh_paths { index } else { 0 };
-        let plan = path_plan(vpls, bounces, mean_albedo(scene));
+        let plan = path_plan(budget, bounces, mean_albedo(scene));
         let offsets: Vec<usize> = plan.iter().scan(0, |acc, &n| {
             let o = *acc;
             *acc += n;
@@ -132,23 +150,37 @@ impl InstantRadiosity {
         }).collect();
         let n_paths = plan.first().copied().unwrap_or(0);
         let halton = (sampling == PathSampling::Halton).then(|| Halton::new(dims(bounces), seed.wrapping_add(frame.wrapping_mul(0x9E37_79B9_7F4A_7C15))));
-        let paths: Vec<Vec<(usize, Vpl)>> = (0..n_paths)
+        let vpls: Vec<(usize, Vpl)> = (0..n_paths)
             .into_par_iter()
-            .map(|i| trace_path(scene, i, &plan, &offsets, (seed, frame), halton.as_ref()))
+            .flat_map_iter(|i| trace_path(scene, i, &plan, &offsets, (seed, frame), halton.as_ref()))
             .collect();
-        self.set.begin_frame();
-        let mut filled = vec![None; vpls];
-        for (slot, v) in paths.into_iter().flatten() {
-            filled[slot] = Some(v);
+        Batch { vpls, planned: plan.iter().sum(), light_paths: n_paths }
+    }
+}
+
+/// What one budget's light paths stored.
+struct Batch {
+    /// VPLs with their slots.
+    vpls: Vec<(usize, Vpl)>,
+    /// Slots the plan fills when no path is lost.
+    planned: usize,
+    /// Light paths traced.
+    light_paths: usize,
+}
+
+/// IR as a source of light-path VPLs for samplers that wrap one (RR): a
+/// budget of `budget` slots, paths fresh per `frame` only with
+/// [`IrConfig::fresh_paths`]; the configured budget is not used.
+impl LightPathGenerator for InstantRadiosity {
+    fn name(&self) -> &'static str {
+        "ir"
+    }
+
+    fn generate(&self, scene: &Scene, budget: usize, seed: u64, frame: u64) -> Vec<Vpl> {
+        if budget == 0 {
+            return Vec::new();
         }
-        for (slot, v) in filled.into_iter().enumerate() {
-            self.set.set(slot, v);
-        }
-        self.set.light_paths = n_paths as u64;
-        let planned: usize = plan.iter().sum();
-        let stored = self.set.stored();
-        self.stats = IrStats { budget: vpls, planned, stored, light_paths: n_paths, lost: planned - stored };
-        &self.set
+        self.trace(scene, budget, seed, frame).vpls.into_iter().map(|(_, v)| v).collect()
     }
 }
 

@@ -35,8 +35,7 @@
 
 #![warn(missing_docs)]
 
-mod halton;
 mod ir;
 
-pub use halton::Halton;
+pub use vpl_core::Halton;
 pub use ir::{InstantRadiosity, IrConfig, IrError, IrStats, PathSampling};

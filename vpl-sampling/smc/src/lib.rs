@@ -47,10 +47,9 @@
 
 mod config;
 mod points;
-mod resample;
 mod sampler;
 
 pub use config::{SmcConfig, SmcError};
 pub use points::{camera_points, camera_sees, candidate_hits, mutually_visible, CameraPoint, CandidateHit};
-pub use resample::resample;
+pub use vpl_core::resample::resample;
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};

@@ -2,14 +2,14 @@
 
 use crate::config::{SmcConfig, SmcError};
 use crate::points::{camera_points, camera_sees, candidate_hits, mutually_visible, CameraPoint, CandidateHit};
-use crate::resample::resample;
+use vpl_core::resample::resample;
 use rayon::prelude::*;
-use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
 use vpl_core::rng::mix64;
-use vpl_core::{stream, Camera, Frame, Light, Material, Purpose, RadiosityEstimator, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
+use vpl_core::scene::LightingKey;
+use vpl_core::{stream, Camera, Frame, Purpose, RadiosityEstimator, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
 use vpl_density::KnnDensity;
 use vpl_pathtrace::PathRadiosity;
 
@@ -94,20 +94,6 @@ pub struct SmcStats {
     pub relit: bool,
     /// Coefficient of variation (σ/μ) of the intensities I(y) of the set.
     pub intensity_cv: f32,
-}
-
-/// What a change of lights is detected by: the scene's geometry, materials and lights.
-#[derive(Clone, Debug, PartialEq)]
-struct LightingKey {
-    geometry: usize,
-    materials: Vec<Material>,
-    lights: Vec<Light>,
-}
-
-impl LightingKey {
-    fn of(scene: &Scene) -> LightingKey {
-        LightingKey { geometry: Arc::as_ptr(&scene.geometry) as usize, materials: scene.materials.clone(), lights: scene.lights.clone() }
-    }
 }
 
 /// The Sequential Monte Carlo Instant Radiosity sampler (Algorithm 1).

@@ -19,6 +19,7 @@
 
 pub mod cli;
 pub mod compare;
+pub mod georgiev;
 pub mod metrics;
 pub mod pipeline;
 pub mod sequence;

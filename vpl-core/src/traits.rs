@@ -33,6 +33,11 @@ pub trait VplSampler: Send {
     fn next_frame(&mut self, frame: &Frame) -> &VplSet;
     /// One line of statistics about the last frame (stored VPLs, paths, …).
     fn report(&self) -> String;
+    /// For samplers that thin candidates (Russian-roulette acceptance): the
+    /// mean acceptance probability of the last frame. `None` for the others.
+    fn acceptance(&self) -> Option<f32> {
+        None
+    }
 }
 
 /// A source of VPLs from light paths whose number is chosen per call, each

@@ -60,6 +60,8 @@ pub struct FrameOutput {
     pub visibility: VisibilityUpdate,
     /// VPL slots that moved since the previous frame (see `VplSet::moved`).
     pub moved: usize,
+    /// VPLs stored in the frame's set.
+    pub stored: usize,
     /// The sampler's report line ("" when the mode needs no VPLs).
     pub sampler_report: String,
     /// The indirect light the VPLs gave (`None` when the mode needs no
@@ -96,6 +98,7 @@ pub fn render_frame(
     let mut visibility = VisibilityUpdate::default();
     let mut sampler_report = String::new();
     let mut moved = 0;
+    let mut stored = 0;
     let mut indirect = None;
     let (_, max_k) = s.mode.k_range(s.max_depth);
     if s.mode != Mode::Direct && max_k >= 2 {
@@ -104,6 +107,7 @@ pub fn render_frame(
         let vpls = sampler.next_frame(&frame);
         t.sampling_ms = ms(t0);
         moved = vpls.moved_count();
+        stored = vpls.stored();
         let t0 = Instant::now();
         visibility = vis.update(scene, vpls);
         t.visibility_ms = ms(t0);
@@ -127,5 +131,5 @@ pub fn render_frame(
         }
     }
     t.total_ms = ms(start);
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, sampler_report, indirect }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_report, indirect }
 }

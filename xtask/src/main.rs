@@ -14,7 +14,7 @@ use std::process::{Command, ExitCode};
 use std::time::Instant;
 
 const SCENES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
-const JOBS: [&str; 3] = ["scenes", "references", "validation"];
+const JOBS: [&str; 4] = ["scenes", "references", "validation", "georgiev"];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -32,7 +32,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
 }
 
 fn main() -> ExitCode {
@@ -86,16 +86,18 @@ struct Profile {
     gallery_spp: u32,
     reference_spp: u32,
     validation_spp: u32,
+    georgiev_spp: u32,
+    georgiev_frames: u32,
 }
 
 fn reproduce(args: &[String]) -> Result<(), String> {
-    let mut profile = Profile { name: "quick", gallery_spp: 64, reference_spp: 64, validation_spp: 1024 };
+    let mut profile = Profile { name: "quick", gallery_spp: 64, reference_spp: 64, validation_spp: 1024, georgiev_spp: 2048, georgiev_frames: 8 };
     let mut only: Vec<String> = JOBS.iter().map(|s| s.to_string()).collect();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => {}
-            "--full" => profile = Profile { name: "full", gallery_spp: 1024, reference_spp: 4096, validation_spp: 32768 },
+            "--full" => profile = Profile { name: "full", gallery_spp: 1024, reference_spp: 4096, validation_spp: 32768, georgiev_spp: 16384, georgiev_frames: 32 },
             "--only" => {
                 let list = it.next().ok_or("--only needs a list")?;
                 only = list.split(',').map(|s| s.trim().to_string()).collect();
@@ -167,6 +169,22 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     }
     readme.push_str(&format!("| total | {:.0} |\n", start.elapsed().as_secs_f64()));
     let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    if only.iter().any(|j| j == "georgiev") {
+        let t = Instant::now();
+        eprintln!("xtask: [georgiev] RR against IR on corner, reference {} spp, {} frames", profile.georgiev_spp, profile.georgiev_frames);
+        let dir = results.join("georgiev");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root())
+            .args(["georgiev", "--spp", &profile.georgiev_spp.to_string(), "--frames", &profile.georgiev_frames.to_string(), "--out"])
+            .arg(&dir)
+            .stdout(std::process::Stdio::null());
+        run(c, "vpl georgiev")?;
+        let md = std::fs::read_to_string(dir.join("georgiev.md")).map_err(|e| e.to_string())?;
+        readme.push_str("## Russian-roulette acceptance (`georgiev/`)\n\n");
+        readme.push_str(md.trim_start_matches("# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n\n"));
+        readme.push_str("\nData: `georgiev/georgiev.csv`.\n\n");
+        timings.push(("georgiev", t.elapsed().as_secs_f64()));
+    }
     readme.push_str(&format!("\nMachine: {threads} hardware threads. Command: `cargo xtask reproduce {}`.\n", args.join(" ")));
     write_atomic(&results.join("README.md"), &readme)?;
     eprintln!("xtask: done in {:.0} s; see results/README.md", start.elapsed().as_secs_f64());

@@ -166,6 +166,28 @@ struct VplArgs {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Reproduce Georgiev & Slusallek's claims on `corner`: RR's mean acceptance and its
+    /// efficiency gain over IR at equal stored VPLs (and RR's acceptance on cornell, office).
+    Georgiev {
+        /// Image size.
+        #[arg(long, default_value = "128x96")]
+        size: Size,
+        /// Stored VPLs of both methods.
+        #[arg(long, default_value_t = 1024)]
+        vpls: usize,
+        /// Frames measured (after 4 warm-up frames).
+        #[arg(long, default_value_t = 8)]
+        frames: u32,
+        /// Samples per pixel of the path-traced reference.
+        #[arg(long, default_value_t = 256)]
+        spp: u32,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Output folder (georgiev.md, georgiev.csv).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Render one frame of a scene.
     Render {
         #[command(flatten)]
@@ -614,6 +636,25 @@ fn run(cli: Cli) -> Res<()> {
             }
             let md = vpl_bench::validation::report_markdown(&vs, spp);
             write_atomic(&out.join("cornell_validation.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+            print!("{md}");
+            Ok(())
+        }
+        Command::Georgiev { size, vpls, frames, spp, seed, out } => {
+            if vpls == 0 || frames == 0 || spp == 0 {
+                return Err("--vpls, --frames and --spp must be at least 1".into());
+            }
+            std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            let settings = vpl_bench::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed };
+            let bar = ProgressBar::new_spinner();
+            bar.set_style(ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}").unwrap());
+            let (md, csv) = vpl_bench::georgiev::georgiev(&settings, &|m| {
+                let short: String = m.chars().take(100).collect();
+                bar.set_message(short);
+                bar.tick();
+            })?;
+            bar.finish_and_clear();
+            write_atomic(&out.join("georgiev.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+            write_atomic(&out.join("georgiev.csv"), csv.as_bytes()).map_err(|e| e.to_string())?;
             print!("{md}");
             Ok(())
         }

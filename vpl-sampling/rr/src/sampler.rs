@@ -214,6 +214,10 @@ impl VplSampler for RrSampler {
         &self.set
     }
 
+    fn acceptance(&self) -> Option<f32> {
+        Some(self.stats.mean_acceptance)
+    }
+
     fn report(&self) -> String {
         let s = self.stats;
         format!(

@@ -66,7 +66,9 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--mode", "sideways"], "sideways");
     fails(&d, &["--scene", "cornell", "--clamp", "-3"], "clamp");
     fails(&d, &["--scene", "cornell", "--threads", "0"], "threads");
-    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "tcas"], "not available");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "rr", "--rr-epsilon", "0"], "--rr-epsilon");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "tcas", "--rsm-res", "0"], "--rsm-res");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "mir", "--mh-iterations", "0"], "--mh-iterations");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--resample-ratio", "0"], "resample-ratio");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--knn-k", "0"], "knn-k");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--max-depth", "2"], "max depth");

@@ -5,16 +5,20 @@
 //! efficient than plain IR at the same number of stored VPLs. Also the mean
 //! acceptance on `cornell` and `office`.
 //!
-//! Efficiency is 1 / (relMSE · time): relMSE of a frame's indirect image
-//! against the path tracer's (clamped by the same rule as the VPLs), time
-//! the frame's sampling, visibility and shading. Both methods use
-//! ray-traced visibility and exhaustive shading, so only the VPLs differ.
+//! Efficiency is 1 / (MSE · time). MSE is a frame's indirect image against
+//! the path tracer's, traced through the same pixel centres that VPL shading
+//! sees and clamped by the same rule as the VPLs, with the reference's own
+//! variance (from its per-pixel standard errors) subtracted. Time is the
+//! frame's sampling, visibility and shading. Both methods use ray-traced
+//! visibility and exhaustive shading, so only the VPLs differ.
 
-use crate::metrics::rel_mse;
+use crate::metrics::{mse, reference_variance};
+use rayon::prelude::*;
 use crate::pipeline::{Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
 use std::fmt::Write as _;
-use vpl_core::{GeometryClamp, Mode, SceneSetup};
-use vpl_pathtrace::{render, PathTracer, RenderSettings};
+use vpl_core::glam::Vec3;
+use vpl_core::{stream, Camera, GeometryClamp, Image, Mode, Purpose, Scene, SceneSetup};
+use vpl_pathtrace::PathTracer;
 use vpl_sampling::{RrConfig, SamplerConfig};
 
 /// Settings of the experiment.
@@ -32,13 +36,15 @@ pub struct GeorgievSettings {
     pub reference_spp: u32,
     /// Seed.
     pub seed: u64,
+    /// RR's settings (its budget is `vpls`).
+    pub rr: RrConfig,
 }
 
 /// One method's figures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MethodFigures {
-    /// Mean relMSE of a frame against the reference.
-    pub rel_mse: f64,
+    /// Mean MSE of a frame against the reference, its noise removed.
+    pub mse: f64,
     /// Mean milliseconds of a frame (sampling + visibility + shading).
     pub ms: f64,
     /// Mean VPLs stored.
@@ -48,32 +54,58 @@ pub struct MethodFigures {
 }
 
 impl MethodFigures {
-    /// 1 / (relMSE · seconds).
+    /// 1 / (MSE · seconds).
     pub fn efficiency(&self) -> f64 {
-        1.0 / (self.rel_mse * self.ms * 1e-3)
+        1.0 / (self.mse * self.ms * 1e-3)
     }
 }
 
-fn spec(sampler: &str, vpls: usize, clamp: GeometryClamp, seed: u64) -> PipelineSpec {
+fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSpec {
+    let vpls = s.vpls;
     PipelineSpec {
         sampler: sampler.into(),
-        config: SamplerConfig { vpls, fresh_paths: true, rr: RrConfig { vpls, ..RrConfig::default() }, ..SamplerConfig::default() },
+        config: SamplerConfig { vpls, fresh_paths: true, rr: RrConfig { vpls, ..s.rr }, ..SamplerConfig::default() },
         visibility: VisibilitySpec::RayTraced,
         shading: ShadingSpec::Exhaustive,
         clamp: Some(clamp),
         mode: Mode::Indirect,
         direct_samples: 1,
-        seed,
+        seed: s.seed,
     }
 }
 
 /// Runs `sampler` on `scene` frame 0 for warm-up + measured frames; with a
 /// reference, measures relMSE. Returns the figures of the measured frames.
-fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<&vpl_core::Image>, progress: &dyn Fn(&str)) -> Result<MethodFigures, String> {
+/// The path tracer's image through the pixel centres (the points VPL
+/// shading lights), `spp` paths a pixel, with per-pixel standard errors.
+pub fn centre_reference(scene: &Scene, camera: &Camera, pt: &PathTracer, spp: u32, seed: u64) -> (Image, Image) {
+    let (w, h) = camera.resolution;
+    let px: Vec<(Vec3, Vec3)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let ray = camera.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5, (0.5, 0.5));
+            let mut rng = stream(seed, 0, Purpose::PIXEL, i as u64);
+            let (mut sum, mut sq) = (Vec3::ZERO, Vec3::ZERO);
+            for _ in 0..spp {
+                let l = pt.li(scene, ray, &mut rng);
+                sum += l;
+                sq += l * l;
+            }
+            let n = spp as f32;
+            let mean = sum / n;
+            let var = if spp > 1 { ((sq - sum * mean) / (n - 1.0)).max(Vec3::ZERO) } else { Vec3::ZERO };
+            (mean, (var / n).map(f32::sqrt))
+        })
+        .collect();
+    let img = |f: fn(&(Vec3, Vec3)) -> Vec3| Image { width: w, height: h, data: px.iter().map(f).collect() };
+    (img(|p| p.0), img(|p| p.1))
+}
+
+fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<(&Image, f64)>, progress: &dyn Fn(&str)) -> Result<MethodFigures, String> {
     let setup = SceneSetup::load(scene_name).map_err(|e| e.to_string())?;
     let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
-    let mut p = Pipeline::new(spec(sampler, s.vpls, clamp, s.seed))?;
+    let mut p = Pipeline::new(spec(sampler, s, clamp))?;
     let mut f = MethodFigures::default();
     for i in 0..s.warmup_frames + s.frames {
         let out = p.render(&setup.scene, &camera, i as u64, 0.0);
@@ -82,8 +114,8 @@ fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<
             continue;
         }
         let n = s.frames as f64;
-        if let Some(r) = reference {
-            f.rel_mse += rel_mse(&out.image, r).map_err(|e| e.to_string())? / n;
+        if let Some((r, var)) = reference {
+            f.mse += (mse(&out.image, r).map_err(|e| e.to_string())? - var) / n;
         }
         f.ms += (out.timings.sampling_ms + out.timings.visibility_ms + out.timings.shading_ms) / n;
         let acc = p.sampler.acceptance().map_or(1.0, |a| a as f64);
@@ -101,9 +133,10 @@ pub fn georgiev(s: &GeorgievSettings, progress: &dyn Fn(&str)) -> Result<(String
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = Some(clamp);
     progress(&format!("corner reference: path tracer, indirect, {} spp", s.reference_spp));
-    let reference = render(&setup.scene, &camera, &pt, RenderSettings { spp: s.reference_spp, seed: s.seed ^ 0xEF, frame: 0 }, &|_, _| {}).map_err(|e| e.to_string())?.image;
-    let ir = run("corner", "ir", s, Some(&reference), progress)?;
-    let rr = run("corner", "rr", s, Some(&reference), progress)?;
+    let (reference, stderr) = centre_reference(&setup.scene, &camera, &pt, s.reference_spp, s.seed ^ 0xEF);
+    let var = reference_variance(&stderr);
+    let ir = run("corner", "ir", s, Some((&reference, var)), progress)?;
+    let rr = run("corner", "rr", s, Some((&reference, var)), progress)?;
     let gain = rr.efficiency() / ir.efficiency();
     let mut acc = Vec::new();
     for scene in ["cornell", "office", "corner"] {
@@ -112,21 +145,23 @@ pub fn georgiev(s: &GeorgievSettings, progress: &dyn Fn(&str)) -> Result<(String
     }
     let mut md = String::new();
     let _ = writeln!(md, "# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n");
-    let _ = writeln!(md, "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer, indirect, same clamp, {} spp. IR uses fresh light paths every frame. Seed {}.\n",
-        s.size.0, s.size.1, s.vpls, clamp.g_max, s.warmup_frames, s.frames, s.reference_spp, s.seed);
-    let _ = writeln!(md, "| method | stored VPLs | mean acceptance | relMSE | ms / frame | efficiency 1/(relMSE·s) |");
+    let _ = writeln!(md, "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer through the pixel centres, indirect, same clamp, {} spp; MSE is against it with its own variance ({:.3e}, from its per-pixel standard errors) subtracted. IR uses fresh light paths every frame. Seed {}.\n",
+        s.size.0, s.size.1, s.vpls, clamp.g_max, s.warmup_frames, s.frames, s.reference_spp, var, s.seed);
+    let _ = writeln!(md, "| method | stored VPLs | mean acceptance | MSE | ms / frame | efficiency 1/(MSE·s) |");
     let _ = writeln!(md, "| --- | --- | --- | --- | --- | --- |");
-    for (name, f) in [("IR", ir), ("RR (eps 0.05, N_C 100)", rr)] {
-        let _ = writeln!(md, "| {name} | {:.0} | {:.3} | {:.5} | {:.1} | {:.1} |", f.stored, f.acceptance, f.rel_mse, f.ms, f.efficiency());
+    let rr_name = format!("RR (eps {}, N_C {})", s.rr.epsilon, s.rr.camera_samples);
+    for (name, f) in [("IR", ir), (rr_name.as_str(), rr)] {
+        let _ = writeln!(md, "| {name} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.3e} |", f.stored, f.acceptance, f.mse, f.ms, f.efficiency());
     }
     let _ = writeln!(md, "\n**Efficiency gain of RR over IR: {gain:.1}x** (paper: more than an order of magnitude). Mean acceptance on `corner`: {:.3} (paper: 0.07, i.e. 93 % discarded).\n", rr.acceptance);
     let _ = writeln!(md, "Mean acceptance probability of RR over the measured frames (same settings):\n\n| scene | mean acceptance | stored VPLs |\n| --- | --- | --- |");
     for (scene, a, st) in &acc {
         let _ = writeln!(md, "| {scene} | {a:.3} | {st:.0} |");
     }
-    let mut csv = String::from("scene,method,stored,acceptance,rel_mse,ms\n");
-    let _ = writeln!(csv, "corner,ir,{:.1},{:.4},{:.6},{:.2}", ir.stored, ir.acceptance, ir.rel_mse, ir.ms);
-    let _ = writeln!(csv, "corner,rr,{:.1},{:.4},{:.6},{:.2}", rr.stored, rr.acceptance, rr.rel_mse, rr.ms);
+    let mut csv = String::from("scene,method,stored,acceptance,mse,ms\n");
+    for (name, f) in [("ir", ir), ("rr", rr)] {
+        let _ = writeln!(csv, "corner,{name},{:.1},{:.4},{:.6e},{:.2}", f.stored, f.acceptance, f.mse, f.ms);
+    }
     for (scene, a, st) in &acc {
         if *scene != "corner" {
             let _ = writeln!(csv, "{scene},rr,{st:.1},{a:.4},,");

@@ -133,3 +133,51 @@ pub fn bench_smc(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: 
     let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
     Ok(SmcBench { candidates: col(0), resampling: col(1), visibility: col(2), radiosity: col(3), knn: col(4), total: col(5), moved: col(6) })
 }
+
+/// One sampler's cost per frame ([`bench_samplers`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplerBench {
+    /// Registry name.
+    pub name: String,
+    /// Milliseconds of the first frame (warm-up, RSMs, pilot).
+    pub first_ms: f64,
+    /// Median milliseconds of the following frames.
+    pub frame_ms: f64,
+    /// Median VPL slots moved per frame.
+    pub moved: f64,
+    /// Median VPLs stored.
+    pub stored: f64,
+}
+
+/// Every sampler of the registry on `name`'s sequence from frame `start`
+/// (the camera walking one frame at a time): `next_frame` time of the first
+/// frame, and the median over the next `repeat` frames. RR reads its own
+/// estimate of the image (no images are rendered here); IR draws fresh paths.
+pub fn bench_samplers(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: u32) -> Result<Vec<SamplerBench>, CoreError> {
+    let setup = SceneSetup::load(name)?;
+    let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
+    let gbuf = vpl_core::GBuffer::empty();
+    let mut out = Vec::new();
+    for entry in vpl_sampling::SAMPLERS {
+        let config = vpl_sampling::SamplerConfig { vpls, fresh_paths: true, ..vpl_sampling::SamplerConfig::default() };
+        let mut s = (entry.build)(&config).map_err(|e| CoreError::Invalid(e.to_string()))?;
+        let mut rows: Vec<[f64; 3]> = Vec::new();
+        let mut first_ms = 0.0;
+        for f in 0..=repeat {
+            let (scene, camera) = setup.frame((start + f).min(count - 1))?;
+            let camera = camera.with_resolution(size)?;
+            let frame = vpl_core::Frame { scene: &scene, camera: &camera, time: 0.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
+            let t = std::time::Instant::now();
+            let set = s.next_frame(&frame);
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            if f == 0 {
+                first_ms = ms;
+            } else {
+                rows.push([ms, set.moved_count() as f64, set.stored() as f64]);
+            }
+        }
+        let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
+        out.push(SamplerBench { name: entry.name.to_string(), first_ms, frame_ms: col(0), moved: col(1), stored: col(2) });
+    }
+    Ok(out)
+}

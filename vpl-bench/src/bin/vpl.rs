@@ -170,7 +170,7 @@ enum Command {
     /// efficiency gain over IR at equal stored VPLs (and RR's acceptance on cornell, office).
     Georgiev {
         /// Image size.
-        #[arg(long, default_value = "128x96")]
+        #[arg(long, default_value = "160x120")]
         size: Size,
         /// Stored VPLs of both methods.
         #[arg(long, default_value_t = 1024)]
@@ -184,6 +184,12 @@ enum Command {
         /// Seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// RR's epsilon of eq. (3).
+        #[arg(long, default_value_t = 0.05)]
+        rr_epsilon: f32,
+        /// RR's camera samples per frame.
+        #[arg(long, default_value_t = 100)]
+        camera_samples: usize,
         /// Output folder (georgiev.md, georgiev.csv).
         #[arg(long)]
         out: PathBuf,
@@ -613,6 +619,14 @@ fn run(cli: Cli) -> Res<()> {
                     b.candidates, b.resampling, b.visibility, b.radiosity, b.knn, b.total, b.moved
                 );
             }
+            println!();
+            println!("Every sampler on office, I = {vpls}, camera walking the sequence from frame 300: next_frame of the first frame, then the median of {} frames (ms):", repeat.max(8));
+            println!("| sampler | first frame | **per frame** | VPLs moved per frame | VPLs stored |");
+            println!("| --- | --- | --- | --- | --- |");
+            let rows = pool.install(|| vpl_bench::stages::bench_samplers("office", (size.0, size.1), vpls, 300, repeat.max(8))).map_err(|e| e.to_string())?;
+            for b in rows {
+                println!("| {} | {:.1} | **{:.1}** | {:.0} | {:.0} |", b.name, b.first_ms, b.frame_ms, b.moved, b.stored);
+            }
             Ok(())
         }
         Command::ValidateCornell { spp, data, out, seed } => {
@@ -639,12 +653,14 @@ fn run(cli: Cli) -> Res<()> {
             print!("{md}");
             Ok(())
         }
-        Command::Georgiev { size, vpls, frames, spp, seed, out } => {
+        Command::Georgiev { size, vpls, frames, spp, seed, rr_epsilon, camera_samples, out } => {
             if vpls == 0 || frames == 0 || spp == 0 {
                 return Err("--vpls, --frames and --spp must be at least 1".into());
             }
+            let rr = vpl_sampling::RrConfig { vpls, epsilon: rr_epsilon, camera_samples, ..vpl_sampling::RrConfig::default() };
+            rr.validate().map_err(|e| e.to_string())?;
             std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-            let settings = vpl_bench::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed };
+            let settings = vpl_bench::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed, rr };
             let bar = ProgressBar::new_spinner();
             bar.set_style(ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}").unwrap());
             let (md, csv) = vpl_bench::georgiev::georgiev(&settings, &|m| {

@@ -125,8 +125,10 @@ fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<
     Ok(f)
 }
 
-/// The experiment; returns the Markdown report and the CSV rows.
-pub fn georgiev(s: &GeorgievSettings, progress: &dyn Fn(&str)) -> Result<(String, String), String> {
+/// The experiment; returns the Markdown report and the CSV rows. Besides
+/// `s.rr`, RR runs on `corner` with each ε of `sweep` (the rest of its
+/// settings as `s.rr`), to show how the gain depends on ε.
+pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<(String, String), String> {
     let setup = SceneSetup::load("corner").map_err(|e| e.to_string())?;
     let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
@@ -138,6 +140,11 @@ pub fn georgiev(s: &GeorgievSettings, progress: &dyn Fn(&str)) -> Result<(String
     let ir = run("corner", "ir", s, Some((&reference, var)), progress)?;
     let rr = run("corner", "rr", s, Some((&reference, var)), progress)?;
     let gain = rr.efficiency() / ir.efficiency();
+    let mut swept = Vec::new();
+    for &epsilon in sweep.iter().filter(|&&e| e != s.rr.epsilon) {
+        let t = GeorgievSettings { rr: RrConfig { epsilon, ..s.rr }, ..*s };
+        swept.push((epsilon, run("corner", "rr", &t, Some((&reference, var)), progress)?));
+    }
     let mut acc = Vec::new();
     for scene in ["cornell", "office", "corner"] {
         let f = if scene == "corner" { rr } else { run(scene, "rr", s, None, progress)? };
@@ -154,17 +161,28 @@ pub fn georgiev(s: &GeorgievSettings, progress: &dyn Fn(&str)) -> Result<(String
         let _ = writeln!(md, "| {name} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.3e} |", f.stored, f.acceptance, f.mse, f.ms, f.efficiency());
     }
     let _ = writeln!(md, "\n**Efficiency gain of RR over IR: {gain:.1}x** (paper: more than an order of magnitude). Mean acceptance on `corner`: {:.3} (paper: 0.07, i.e. 93 % discarded).\n", rr.acceptance);
+    if !swept.is_empty() {
+        let _ = writeln!(md, "RR with other values of epsilon (same frames and reference):\n\n| epsilon | stored VPLs | mean acceptance | MSE | ms / frame | gain over IR |\n| --- | --- | --- | --- | --- | --- |");
+        let mut rows: Vec<(f32, MethodFigures)> = swept.clone();
+        rows.push((s.rr.epsilon, rr));
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (e, f) in rows {
+            let _ = writeln!(md, "| {e} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.1}x |", f.stored, f.acceptance, f.mse, f.ms, f.efficiency() / ir.efficiency());
+        }
+        let _ = writeln!(md);
+    }
     let _ = writeln!(md, "Mean acceptance probability of RR over the measured frames (same settings):\n\n| scene | mean acceptance | stored VPLs |\n| --- | --- | --- |");
     for (scene, a, st) in &acc {
         let _ = writeln!(md, "| {scene} | {a:.3} | {st:.0} |");
     }
-    let mut csv = String::from("scene,method,stored,acceptance,mse,ms\n");
-    for (name, f) in [("ir", ir), ("rr", rr)] {
-        let _ = writeln!(csv, "corner,{name},{:.1},{:.4},{:.6e},{:.2}", f.stored, f.acceptance, f.mse, f.ms);
+    let mut csv = String::from("scene,method,epsilon,stored,acceptance,mse,ms\n");
+    let _ = writeln!(csv, "corner,ir,,{:.1},{:.4},{:.6e},{:.2}", ir.stored, ir.acceptance, ir.mse, ir.ms);
+    for (e, f) in std::iter::once((s.rr.epsilon, rr)).chain(swept.iter().copied()) {
+        let _ = writeln!(csv, "corner,rr,{e},{:.1},{:.4},{:.6e},{:.2}", f.stored, f.acceptance, f.mse, f.ms);
     }
     for (scene, a, st) in &acc {
         if *scene != "corner" {
-            let _ = writeln!(csv, "{scene},rr,{st:.1},{a:.4},,");
+            let _ = writeln!(csv, "{scene},rr,{},{st:.1},{a:.4},,", s.rr.epsilon);
         }
     }
     Ok((md, csv))

@@ -55,16 +55,7 @@ impl Importons {
             .map(|j| {
                 let i = first.wrapping_add(j);
                 let ray = camera.ray(halton.sample(i, 0) * w, halton.sample(i, 1) * h, (halton.sample(i, 2), halton.sample(i, 3)));
-                let hit = scene.intersect(&ray)?;
-                let wo = -ray.d;
-                if wo.dot(hit.point.ng) <= 0.0 && !scene.two_sided {
-                    return None;
-                }
-                let albedo = scene.material(&hit.point).albedo;
-                if albedo.max_element() <= 0.0 {
-                    return None;
-                }
-                let sp = hit.point.facing(wo);
+                let (sp, albedo) = scene.reflecting_hit(&ray)?;
                 Some(Importon { p: sp.p, n: sp.n, ng: sp.ng, albedo })
             })
             .collect();

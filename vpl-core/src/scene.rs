@@ -267,6 +267,21 @@ impl Scene {
         Some(Hit { t, point })
     }
 
+    /// The surface `ray` meets, if it reflects light back along the ray: its
+    /// normals turned toward the ray's origin and its albedo ρ. `None` on a
+    /// miss, on a one-sided surface seen from behind, and on a black surface.
+    #[inline]
+    pub fn reflecting_hit(&self, ray: &Ray) -> Option<(SurfacePoint, Vec3)> {
+        let hit = self.intersect(ray)?;
+        let wo = -ray.d;
+        if wo.dot(hit.point.ng) <= 0.0 && !self.two_sided {
+            return None;
+        }
+        let sp = hit.point.facing(wo);
+        let rho = self.material(&sp).albedo;
+        (rho.max_element() > 0.0).then_some((sp, rho))
+    }
+
     /// Whether anything blocks `ray` before `ray.t_max` (early-exit shadow test).
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {

@@ -190,6 +190,9 @@ enum Command {
         /// RR's camera samples per frame.
         #[arg(long, default_value_t = 100)]
         camera_samples: usize,
+        /// Further values of epsilon to run RR with on corner (comma-separated; empty: none).
+        #[arg(long, default_value = "0.02,0.2", value_delimiter = ',')]
+        sweep: Vec<f32>,
         /// Output folder (georgiev.md, georgiev.csv).
         #[arg(long)]
         out: PathBuf,
@@ -653,7 +656,7 @@ fn run(cli: Cli) -> Res<()> {
             print!("{md}");
             Ok(())
         }
-        Command::Georgiev { size, vpls, frames, spp, seed, rr_epsilon, camera_samples, out } => {
+        Command::Georgiev { size, vpls, frames, spp, seed, rr_epsilon, camera_samples, sweep, out } => {
             if vpls == 0 || frames == 0 || spp == 0 {
                 return Err("--vpls, --frames and --spp must be at least 1".into());
             }
@@ -663,7 +666,10 @@ fn run(cli: Cli) -> Res<()> {
             let settings = vpl_bench::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed, rr };
             let bar = ProgressBar::new_spinner();
             bar.set_style(ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}").unwrap());
-            let (md, csv) = vpl_bench::georgiev::georgiev(&settings, &|m| {
+            if let Some(bad) = sweep.iter().find(|e| !(**e > 0.0 && **e <= 1.0)) {
+                return Err(format!("--sweep: epsilon {bad} is outside (0, 1]"));
+            }
+            let (md, csv) = vpl_bench::georgiev::georgiev(&settings, &sweep, &|m| {
                 let short: String = m.chars().take(100).collect();
                 bar.set_message(short);
                 bar.tick();

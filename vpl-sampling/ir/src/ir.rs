@@ -263,19 +263,7 @@ fn trace_path(scene: &Scene, i: usize, plan: &[usize], offsets: &[usize], (seed,
         if i >= n_j {
             break;
         }
-        let Some(hit) = scene.intersect(&ray) else { break };
-        let mut sp = hit.point;
-        let wo = -ray.d;
-        if wo.dot(sp.ng) <= 0.0 {
-            if !scene.two_sided {
-                break;
-            }
-            sp = sp.facing(wo);
-        }
-        let rho = scene.material(&sp).albedo;
-        if rho.max_element() <= 0.0 {
-            break;
-        }
+        let Some((sp, rho)) = scene.reflecting_hit(&ray) else { break };
         let slot = offsets[j] + i;
         // Flux α·ρ/π per path, averaged over the n_j paths of bounce j.
         let flux = alpha * rho * (FRAC_1_PI / n_j as f32);

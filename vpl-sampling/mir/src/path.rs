@@ -25,16 +25,7 @@ pub fn path_vpl(scene: &Scene, u: &[f32], bounces: u32, id: u64) -> Option<Vpl> 
     let mut ray = e.ray;
     let eps = scene.epsilon();
     for b in 1..=j {
-        let hit = scene.intersect(&ray)?;
-        let wo = -ray.d;
-        if wo.dot(hit.point.ng) <= 0.0 && !scene.two_sided {
-            return None;
-        }
-        let sp = hit.point.facing(wo);
-        let rho = scene.material(&sp).albedo;
-        if rho.max_element() <= 0.0 {
-            return None;
-        }
+        let (sp, rho) = scene.reflecting_hit(&ray)?;
         if b == j {
             let flux = alpha * rho * (FRAC_1_PI * bounces as f32);
             return Some(Vpl { y: sp.p, n: sp.n, flux, id, bounce: j });

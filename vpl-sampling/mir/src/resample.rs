@@ -84,25 +84,12 @@ impl VplSampler for MirResampleSampler {
                 let mut rng = stream(seed, index, Purpose::CAMERA_POINTS, j as u64);
                 let (u, v) = rng.next_2d();
                 let ray = camera.ray(u * w, v * h, rng.next_2d());
-                let hit = scene.intersect(&ray)?;
-                let wo = -ray.d;
-                if wo.dot(hit.point.ng) <= 0.0 && !scene.two_sided {
-                    return None;
-                }
-                let x = hit.point.facing(wo);
-                let rho = scene.material(&x).albedo;
-                if rho.max_element() <= 0.0 {
-                    return None;
-                }
+                let (x, rho) = scene.reflecting_hit(&ray)?;
                 let d = LocalFrame::from_normal(x.n).to_world(cosine_hemisphere(rng.next_f32(), rng.next_f32()));
                 if d.dot(x.ng) <= 0.0 {
                     return None;
                 }
-                let yh = scene.intersect(&Ray::new(x.p + x.ng * eps, d))?;
-                if (-d).dot(yh.point.ng) <= 0.0 && !scene.two_sided {
-                    return None;
-                }
-                let y = yh.point.facing(-d);
+                let (y, _) = scene.reflecting_hit(&Ray::new(x.p + x.ng * eps, d))?;
                 // Cosine sampling: f·cos/pdf = ρ(x).
                 let l = pt.reflected(scene, &y, -d, c.radiosity_bounces, &mut rng);
                 let weight = luminance(rho * l);

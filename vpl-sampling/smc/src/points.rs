@@ -28,14 +28,6 @@ pub struct CandidateHit {
     pub origin: u32,
 }
 
-/// Whether a surface seen from direction `wo` (pointing away from it)
-/// reflects light back that way.
-#[inline]
-fn reflects_toward(scene: &Scene, hit: &SurfacePoint, wo: Vec3) -> bool {
-    let front = wo.dot(hit.ng) > 0.0;
-    (front || scene.two_sided) && scene.material(hit).albedo.max_element() > 0.0
-}
-
 /// Casts `n` camera rays through uniformly random raster positions; keeps the
 /// hits that reflect light toward the camera, in ray order. Ray j draws from
 /// stream (seed, iteration, CAMERA_POINTS, j).
@@ -47,12 +39,7 @@ pub fn camera_points(scene: &Scene, camera: &Camera, n: usize, seed: u64, iterat
             let mut rng = stream(seed, iteration, Purpose::CAMERA_POINTS, j as u64);
             let (u, v) = rng.next_2d();
             let ray = camera.ray(u * w, v * h, rng.next_2d());
-            let hit = scene.intersect(&ray)?;
-            let wo = -ray.d;
-            if !reflects_toward(scene, &hit.point, wo) {
-                return None;
-            }
-            let sp = hit.point.facing(wo);
+            let (sp, _) = scene.reflecting_hit(&ray)?;
             Some(CameraPoint { p: sp.p, n: sp.n, ng: sp.ng })
         })
         .collect();
@@ -74,11 +61,8 @@ pub fn candidate_hits(scene: &Scene, xs: &[CameraPoint], seed: u64, iteration: u
             if d.dot(x.ng) <= 0.0 {
                 return None;
             }
-            let hit = scene.intersect(&Ray::new(x.p + x.ng * eps, d))?;
-            if !reflects_toward(scene, &hit.point, -d) {
-                return None;
-            }
-            Some(CandidateHit { y: hit.point.facing(-d), origin: j as u32 })
+            let (y, _) = scene.reflecting_hit(&Ray::new(x.p + x.ng * eps, d))?;
+            Some(CandidateHit { y, origin: j as u32 })
         })
         .collect();
     found.into_iter().flatten().collect()

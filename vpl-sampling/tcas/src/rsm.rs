@@ -57,16 +57,7 @@ impl Rsm {
                 let (s, r) = ((t as u32 % res) as f32, (t as u32 / res) as f32);
                 let u_dir = ((s + 0.5) / res as f32, (r + 0.5) / res as f32);
                 let e = scene.emit_from(light, r2(t as u64), u_dir)?;
-                let hit = scene.intersect(&e.ray)?;
-                let wo = -e.ray.d;
-                if wo.dot(hit.point.ng) <= 0.0 && !scene.two_sided {
-                    return None;
-                }
-                let sp = hit.point.facing(wo);
-                let rho = scene.material(&sp).albedo;
-                if rho.max_element() <= 0.0 {
-                    return None;
-                }
+                let (sp, rho) = scene.reflecting_hit(&e.ray)?;
                 Some(Texel { y: sp.p, n: sp.n, power: e.beta * rho * (inv * FRAC_1_PI) })
             })
             .collect();

@@ -40,6 +40,21 @@ pub struct GeorgievSettings {
     pub rr: RrConfig,
 }
 
+/// What [`georgiev`] produced.
+#[derive(Clone, Debug)]
+pub struct GeorgievReport {
+    /// The Markdown report.
+    pub markdown: String,
+    /// CSV rows: scene, method, epsilon, stored, acceptance, mse, ms.
+    pub csv: String,
+    /// The path-traced reference of `corner` (pixel centres).
+    pub reference: Image,
+    /// IR's last measured frame.
+    pub ir: Image,
+    /// RR's last measured frame (the settings' ε).
+    pub rr: Image,
+}
+
 /// One method's figures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MethodFigures {
@@ -101,12 +116,13 @@ pub fn centre_reference(scene: &Scene, camera: &Camera, pt: &PathTracer, spp: u3
     (img(|p| p.0), img(|p| p.1))
 }
 
-fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<(&Image, f64)>, progress: &dyn Fn(&str)) -> Result<MethodFigures, String> {
+fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<(&Image, f64)>, progress: &dyn Fn(&str)) -> Result<(MethodFigures, Image), String> {
     let setup = SceneSetup::load(scene_name).map_err(|e| e.to_string())?;
     let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
     let mut p = Pipeline::new(spec(sampler, s, clamp))?;
     let mut f = MethodFigures::default();
+    let mut last = Image::new(s.size.0, s.size.1);
     for i in 0..s.warmup_frames + s.frames {
         let out = p.render(&setup.scene, &camera, i as u64, 0.0);
         progress(&format!("{scene_name} {sampler} frame {i}: {}", out.sampler_report));
@@ -121,14 +137,15 @@ fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<
         let acc = p.sampler.acceptance().map_or(1.0, |a| a as f64);
         f.acceptance += acc / n;
         f.stored += out.stored as f64 / n;
+        last = out.image;
     }
-    Ok(f)
+    Ok((f, last))
 }
 
 /// The experiment; returns the Markdown report and the CSV rows. Besides
 /// `s.rr`, RR runs on `corner` with each ε of `sweep` (the rest of its
 /// settings as `s.rr`), to show how the gain depends on ε.
-pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<(String, String), String> {
+pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<GeorgievReport, String> {
     let setup = SceneSetup::load("corner").map_err(|e| e.to_string())?;
     let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
@@ -137,17 +154,17 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
     progress(&format!("corner reference: path tracer, indirect, {} spp", s.reference_spp));
     let (reference, stderr) = centre_reference(&setup.scene, &camera, &pt, s.reference_spp, s.seed ^ 0xEF);
     let var = reference_variance(&stderr);
-    let ir = run("corner", "ir", s, Some((&reference, var)), progress)?;
-    let rr = run("corner", "rr", s, Some((&reference, var)), progress)?;
+    let (ir, ir_image) = run("corner", "ir", s, Some((&reference, var)), progress)?;
+    let (rr, rr_image) = run("corner", "rr", s, Some((&reference, var)), progress)?;
     let gain = rr.efficiency() / ir.efficiency();
     let mut swept = Vec::new();
     for &epsilon in sweep.iter().filter(|&&e| e != s.rr.epsilon) {
         let t = GeorgievSettings { rr: RrConfig { epsilon, ..s.rr }, ..*s };
-        swept.push((epsilon, run("corner", "rr", &t, Some((&reference, var)), progress)?));
+        swept.push((epsilon, run("corner", "rr", &t, Some((&reference, var)), progress)?.0));
     }
     let mut acc = Vec::new();
     for scene in ["cornell", "office", "corner"] {
-        let f = if scene == "corner" { rr } else { run(scene, "rr", s, None, progress)? };
+        let f = if scene == "corner" { rr } else { run(scene, "rr", s, None, progress)?.0 };
         acc.push((scene, f.acceptance, f.stored));
     }
     let mut md = String::new();
@@ -185,5 +202,6 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
             let _ = writeln!(csv, "{scene},rr,{},{st:.1},{a:.4},,", s.rr.epsilon);
         }
     }
-    Ok((md, csv))
+    let _ = writeln!(md, "\nPictures (indirect light, same exposure): the reference `corner_reference.png`, IR's last measured frame `corner_ir.png`, RR's `corner_rr.png`; EXRs beside them.\n\n![reference](corner_reference.png) ![IR](corner_ir.png) ![RR](corner_rr.png)");
+    Ok(GeorgievReport { markdown: md, csv, reference, ir: ir_image, rr: rr_image })
 }

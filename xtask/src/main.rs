@@ -181,7 +181,8 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         run(c, "vpl georgiev")?;
         let md = std::fs::read_to_string(dir.join("georgiev.md")).map_err(|e| e.to_string())?;
         readme.push_str("## Russian-roulette acceptance (`georgiev/`)\n\n");
-        readme.push_str(md.trim_start_matches("# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n\n"));
+        let body = md.trim_start_matches("# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n\n");
+        readme.push_str(&body.replace("](corner_", "](georgiev/corner_"));
         readme.push_str("\nData: `georgiev/georgiev.csv`.\n\n");
         timings.push(("georgiev", t.elapsed().as_secs_f64()));
     }

@@ -190,7 +190,8 @@ enum Command {
         /// RR's camera samples per frame.
         #[arg(long, default_value_t = 100)]
         camera_samples: usize,
-        /// Further values of epsilon to run RR with on corner (comma-separated; empty: none).
+        /// Further values of epsilon to run RR with on corner (comma-separated; a value equal to
+        /// --rr-epsilon is skipped, so `--sweep 0.05` runs none).
         #[arg(long, default_value = "0.02,0.2", value_delimiter = ',')]
         sweep: Vec<f32>,
         /// Output folder (georgiev.md, georgiev.csv).
@@ -669,15 +670,22 @@ fn run(cli: Cli) -> Res<()> {
             if let Some(bad) = sweep.iter().find(|e| !(**e > 0.0 && **e <= 1.0)) {
                 return Err(format!("--sweep: epsilon {bad} is outside (0, 1]"));
             }
-            let (md, csv) = vpl_bench::georgiev::georgiev(&settings, &sweep, &|m| {
+            let r = vpl_bench::georgiev::georgiev(&settings, &sweep, &|m| {
                 let short: String = m.chars().take(100).collect();
                 bar.set_message(short);
                 bar.tick();
             })?;
             bar.finish_and_clear();
-            write_atomic(&out.join("georgiev.md"), md.as_bytes()).map_err(|e| e.to_string())?;
-            write_atomic(&out.join("georgiev.csv"), csv.as_bytes()).map_err(|e| e.to_string())?;
-            print!("{md}");
+            // One exposure for all three pictures: the reference's mean luminance at 0.18.
+            let mean = r.reference.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>() / r.reference.data.len().max(1) as f64;
+            let exposure = if mean > 0.0 { (0.18 / mean) as f32 } else { 1.0 };
+            for (name, img) in [("reference", &r.reference), ("ir", &r.ir), ("rr", &r.rr)] {
+                img.write_exr(out.join(format!("corner_{name}.exr"))).map_err(|e| e.to_string())?;
+                img.write_png(out.join(format!("corner_{name}.png")), exposure).map_err(|e| e.to_string())?;
+            }
+            write_atomic(&out.join("georgiev.md"), r.markdown.as_bytes()).map_err(|e| e.to_string())?;
+            write_atomic(&out.join("georgiev.csv"), r.csv.as_bytes()).map_err(|e| e.to_string())?;
+            print!("{}", r.markdown);
             Ok(())
         }
     }

@@ -254,3 +254,49 @@ fn adaptive_samplers_survive_degenerate_cases() {
         assert!(one.iter().all(|s| s.len() == 1 && s.iter().all(|(_, v)| v.flux.is_finite() && v.flux.min_element() >= 0.0)), "{name}: I = 1");
     }
 }
+
+/// RR's overflow branch is unbiased: when more candidates are accepted than
+/// there are slots, a uniform random I of the A accepted are kept with
+/// flux × A/I. Forced here on `cornell` (16×16, I = 64): frame 0 reads a
+/// bright previous image (Φ̃_v high: few accepted, so the next candidate
+/// budget is many times I), frame 1 a dark one (Φ̃_v tiny: all accepted,
+/// then thinned). Frame 1's mean image over 96 seeds equals IR's over 96
+/// other seeds: image-mean |z| < 4 in each channel.
+#[test]
+fn rr_thinning_of_an_overflow_is_unbiased() {
+    let (scene, camera) = setup("cornell", (16, 16));
+    let gbuf = render_gbuffer(&scene, &camera);
+    let bright = Image { width: 16, height: 16, data: vec![Vec3::splat(1e3); 256] };
+    let dark = Image { width: 16, height: 16, data: vec![Vec3::splat(1e-12); 256] };
+    let seeds = 96;
+    let mut thinned = 0;
+    let rr: Vec<Image> = (0..seeds)
+        .map(|s| {
+            let mut rr = RrSampler::over_ir(RrConfig { vpls: 64, ..RrConfig::default() }, 3, false).unwrap();
+            rr.next_frame(&Frame { previous: Some(&bright), ..frame(&scene, &camera, &gbuf, 0, 300 + s) });
+            let set = rr.next_frame(&Frame { previous: Some(&dark), ..frame(&scene, &camera, &gbuf, 1, 300 + s) }).clone();
+            let st = rr.stats();
+            if st.accepted > 64 {
+                thinned += 1;
+            }
+            assert!(st.stored <= 64);
+            exhaustive_rt(&scene, &gbuf, &set, None)
+        })
+        .collect();
+    assert_eq!(thinned, seeds, "the overflow branch was not taken in every seed");
+    let ir: Vec<Image> = (0..seeds)
+        .map(|s| {
+            let mut ir = build("ir", &SamplerConfig { vpls: 64, ..SamplerConfig::default() }).unwrap();
+            let set = ir.next_frame(&frame(&scene, &camera, &gbuf, 0, 900 + s)).clone();
+            exhaustive_rt(&scene, &gbuf, &set, None)
+        })
+        .collect();
+    let (tr, ti) = (totals(&rr), totals(&ir));
+    for c in 0..3 {
+        let (mr, sr) = mean_and_se_of(&tr.iter().map(|t| t[c]).collect::<Vec<_>>());
+        let (mi, si) = mean_and_se_of(&ti.iter().map(|t| t[c]).collect::<Vec<_>>());
+        let z = (mr - mi) / (sr * sr + si * si).sqrt();
+        eprintln!("channel {c}: RR thinned {mr:.5} ± {sr:.5}, IR {mi:.5} ± {si:.5}, z {z:.2}");
+        assert!(z.abs() < 4.0, "channel {c}: RR thinned {mr:.5} ± {sr:.5} against IR {mi:.5} ± {si:.5} (z {z:.2})");
+    }
+}

@@ -125,6 +125,19 @@ impl KnnDensity {
     }
 }
 
+/// The densities of a VPL set, each point against the others (eq. 7 with
+/// the point excluded), in the order given: k is lowered to n − 1 for a set
+/// too small for it, and a single point (or k = 0) gets the uniform density
+/// 1 / `area` over the scene's surface. Non-finite points give zeros.
+pub fn set_densities(points: &[Vec3], k: usize, area: f32) -> Vec<f32> {
+    let n = points.len();
+    let k = k.min(n.saturating_sub(1));
+    if k == 0 {
+        return vec![1.0 / area.max(f32::MIN_POSITIVE); n];
+    }
+    KnnDensity::new(points).map(|d| d.members(k)).unwrap_or_else(|_| vec![0.0; n])
+}
+
 /// `k / (n π r²)`: infinite at r = 0, zero at r = ∞.
 #[inline]
 fn density(k: usize, n: usize, r2: f32) -> f32 {
@@ -134,6 +147,16 @@ fn density(k: usize, n: usize, r2: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn set_densities_fall_back_for_small_sets() {
+        assert!(set_densities(&[], 8, 2.0).is_empty());
+        assert_eq!(set_densities(&[Vec3::ZERO], 8, 2.0), vec![0.5]);
+        // Two points 1 apart: k lowered to 1, density 1 / (2 π · 1²) each.
+        let d = set_densities(&[Vec3::ZERO, Vec3::X], 8, 2.0);
+        assert!(d.iter().all(|&p| (p - 1.0 / (2.0 * PI)).abs() < 1e-6), "{d:?}");
+        assert_eq!(set_densities(&[Vec3::ZERO, Vec3::splat(f32::NAN)], 1, 2.0), vec![0.0, 0.0]);
+    }
 
     #[test]
     fn rendering_k_follows_eq_8() {

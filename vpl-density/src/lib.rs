@@ -42,4 +42,4 @@
 
 mod knn;
 
-pub use knn::{rendering_k, DensityError, KnnDensity};
+pub use knn::{rendering_k, set_densities, DensityError, KnnDensity};

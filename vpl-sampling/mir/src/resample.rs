@@ -12,7 +12,7 @@ use vpl_core::resample::resample;
 use vpl_core::rng::mix64;
 use vpl_core::sampling::cosine_hemisphere;
 use vpl_core::{stream, Frame, LocalFrame, Mode, Purpose, RadiosityEstimator, Ray, SurfacePoint, Vpl, VplSampler, VplSet};
-use vpl_density::{rendering_k, KnnDensity};
+use vpl_density::{rendering_k, set_densities};
 use vpl_pathtrace::{PathRadiosity, PathTracer};
 
 /// Counts of the last frame.
@@ -104,12 +104,7 @@ impl VplSampler for MirResampleSampler {
         let radiance: Vec<Vec3> = chosen.par_iter().map(|&i| est.radiosity(scene, &useful[i].y, mix64(seed ^ mix64(index ^ (i as u64) << 20)))).collect();
         let m = chosen.len();
         let pts: Vec<Vec3> = chosen.iter().map(|&i| useful[i].y.p).collect();
-        let k = c.knn_k.unwrap_or_else(|| rendering_k(c.vpls)).min(m.saturating_sub(1));
-        let dens = if k == 0 {
-            vec![1.0 / scene.surface_area().max(f32::MIN_POSITIVE); m]
-        } else {
-            KnnDensity::new(&pts).map(|d| d.members(k)).unwrap_or_else(|_| vec![0.0; m])
-        };
+        let dens = set_densities(&pts, c.knn_k.unwrap_or_else(|| rendering_k(c.vpls)), scene.surface_area());
         self.set.begin_frame();
         for s in 0..c.vpls {
             let v = (s < m).then(|| {

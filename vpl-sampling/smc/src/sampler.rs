@@ -10,7 +10,7 @@ use vpl_core::image::luminance;
 use vpl_core::rng::mix64;
 use vpl_core::scene::LightingKey;
 use vpl_core::{stream, Camera, Frame, Purpose, RadiosityEstimator, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
-use vpl_density::KnnDensity;
+use vpl_density::{set_densities, KnnDensity};
 use vpl_pathtrace::PathRadiosity;
 
 /// A radiosity estimator the sampler can share between threads.
@@ -354,12 +354,7 @@ impl SmcSampler {
         let slots: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some()).collect();
         let n = slots.len();
         let pts: Vec<Vec3> = slots.iter().map(|&s| self.particles[s].unwrap().y.p).collect();
-        let k = c.k().min(n.saturating_sub(1));
-        let dens = if k == 0 {
-            vec![1.0 / scene.surface_area().max(f32::MIN_POSITIVE); n]
-        } else {
-            KnnDensity::new(&pts).map(|d| d.members(k)).unwrap_or_else(|_| vec![0.0; n])
-        };
+        let dens = set_densities(&pts, c.k(), scene.surface_area());
         for (&s, &p) in slots.iter().zip(&dens) {
             if let Some(q) = self.particles[s].as_mut() {
                 q.density = p;

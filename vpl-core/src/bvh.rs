@@ -80,10 +80,14 @@ impl Bvh {
         Bvh { cwbvh, tris, order }
     }
 
-    /// Origin, direction and the obvhs ray of `ray`.
+    /// Origin, direction and the obvhs ray of `ray`. A component of −0.0
+    /// becomes +0.0: obvhs takes the traversal octant from `d < 0` (false for
+    /// −0.0) but the inverse direction from the sign bit (−1/ε), and a ray
+    /// whose two disagree misses everything. `-direction` of an axis-aligned
+    /// sun or a cosine sample about an axis-aligned normal makes such rays.
     #[inline(always)]
     fn prepare(ray: &Ray) -> (Vec3A, Vec3A, obvhs::ray::Ray) {
-        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
+        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d) + Vec3A::ZERO);
         (o, d, obvhs::ray::Ray::new(o, d, 0.0, ray.t_max))
     }
 
@@ -105,5 +109,34 @@ impl Bvh {
         let (o, d, r) = Self::prepare(ray);
         let tris = &self.tris;
         !self.cwbvh.ray_traverse_miss(r, |_, id| tris[id].intersect(o, d, ray.t_max))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::material::Material;
+    use crate::mesh::Mesh;
+    use crate::ray::Ray;
+    use crate::scene::Scene;
+    use glam::Vec3;
+
+    /// A roof over the origin: rays straight up hit it whatever the sign of
+    /// their zero components, and a sun straight overhead is shadowed.
+    #[test]
+    fn negative_zero_directions_traverse_like_positive_ones() {
+        let mut mesh = Mesh::default();
+        mesh.push_quad(Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0), 0);
+        mesh.push_quad(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(-5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, -5.0), 0);
+        let sun = crate::light::Light::Directional { direction: Vec3::new(0.0, -1.0, 0.0), irradiance: Vec3::ONE };
+        let s = Scene::new("roof", &mesh, vec![Material::diffuse("m", Vec3::splat(0.5))], vec![sun], true).unwrap();
+        let o = Vec3::new(0.2, 0.01, 0.3);
+        for d in [Vec3::new(0.0, 1.0, 0.0), Vec3::new(-0.0, 1.0, -0.0), Vec3::new(-0.0, 1.0, 0.0)] {
+            assert!(s.occluded(&Ray::new(o, d)), "{d:?}");
+            let t = s.intersect(&Ray::new(o, d)).map(|h| h.t);
+            assert!(t.is_some_and(|t| (t - 0.99).abs() < 1e-4), "{d:?}: {t:?}");
+        }
+        let (ls, _) = s.sample_light(o, 0.5, (0.5, 0.5)).unwrap();
+        assert!(ls.wi.x.is_sign_negative(), "the test needs −0.0 in the light direction");
+        assert!(!s.light_unoccluded(Vec3::new(0.2, 0.0, 0.3), Vec3::Y, &ls));
     }
 }

@@ -233,10 +233,15 @@ fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
 /// the first view did not see. Per frame after the cut: the share of VPLs in
 /// the room and the indirect light on the room's pixels (ray-traced
 /// visibility, exhaustive shading, default clamp), against a sampler warmed
-/// up at the new view. Bound: the room's light reaches 80 % of that within
-/// 5 frames (a sixth of a second at 30 fps; measured: 3). Few VPLs suffice: the kNN
-/// density of a sparse region is low, so its VPLs carry large flux; the VPL
-/// count itself grows by at most M_max = 16 a frame.
+/// up at the new view. Before the cut the room holds under a tenth of the
+/// VPL share it holds at steady state (measured: 1.5 % of the VPLs against
+/// 24 %). Bound: the room's light reaches 80 % of the steady state's within
+/// 10 frames (a third of a second at 30 fps; measured: 9). Few VPLs suffice
+/// for the energy: the kNN density of a sparse region is low, so its VPLs
+/// carry large flux; the VPL count itself grows by at most M_max = 16 a
+/// frame. (When VPLs rendered with the radiosity estimates their selection
+/// used, the selected estimates were biased high and this reached 80 % in 3
+/// frames: a measure of the bias, not of the sampler's speed.)
 #[test]
 fn newly_visible_rooms_fill_within_frames() {
     let setup = SceneSetup::load("office").unwrap();
@@ -270,9 +275,9 @@ fn newly_visible_rooms_fill_within_frames() {
         }
     }
     eprintln!("room light / VPL share before the cut {before:?}, steady share {target_share:.3}; per frame: {trace:?}");
-    assert!(before.0 < 0.5, "the room was already lit before the cut: {before:?}");
+    assert!(before.1 < 0.1 * target_share, "the room already held VPLs before the cut: {before:?}, steady share {target_share}");
     let f = filled_at.expect("the room's light did not reach 80 % within 12 frames");
-    assert!(f <= 5, "the room's light reached 80 % only after {f} frames");
+    assert!(f <= 10, "the room's light reached 80 % only after {f} frames");
 }
 
 /// SMC frames give the same VPLs, bit for bit, on one thread and on two.
@@ -291,4 +296,33 @@ fn smc_is_bit_identical_across_thread_counts() {
         })
     };
     assert!(run(1) == run(2), "1 and 2 threads differ");
+}
+
+/// The flux of a VPL uses a radiosity estimate its selection did not see.
+/// Algorithm 1 keeps the candidates whose estimated intensity is largest and
+/// drops the smallest; rendering with those same 16-path estimates made the
+/// kept VPLs too bright (the winner's curse): `office` at frame 600 and
+/// `maze` at frame 300, 2048 VPLs after the 100-iteration warm-up,
+/// exhaustive ray-traced shading without a clamp, came out 67 % and 69 %
+/// above path tracing at 160×120 (office 74 % at this test's 64×48). With
+/// independent estimates the image mean is within 10 % of path tracing's
+/// (256 spp; its standard error is under 1 %): what is left is the kNN
+/// densities' own bias (measured here +3.9 % and +6.5 %).
+#[test]
+fn selection_does_not_bias_the_vpl_radiosities() {
+    use vpl_core::Mode;
+    use vpl_pathtrace::{render, PathTracer, RenderSettings};
+    for (name, frame) in [("office", 600), ("maze", 300)] {
+        let setup = SceneSetup::load(name).unwrap();
+        let (scene, camera) = setup.frame(frame).unwrap();
+        let camera = camera.with_resolution((64, 48)).unwrap();
+        let gbuf = render_gbuffer(&scene, &camera);
+        let s = warmed(&scene, &camera, 2048, 100, 5);
+        let img = exhaustive_rt(&scene, &gbuf, s.vpls(), None);
+        let pt = render(&scene, &camera, &PathTracer::new(5, Mode::Indirect), RenderSettings { spp: 256, seed: 5, frame: frame as u64 }, &|_, _| {}).unwrap().image;
+        let lum = |i: &Image| i.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>();
+        let ratio = lum(&img) / lum(&pt);
+        eprintln!("{name}: SMC / path tracing = {ratio:.3}");
+        assert!((ratio - 1.0).abs() < 0.10, "{name}: the SMC image mean is {ratio:.3} of path tracing's");
+    }
 }

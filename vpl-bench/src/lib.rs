@@ -19,9 +19,13 @@
 
 pub mod cli;
 pub mod compare;
+pub mod figures;
 pub mod georgiev;
 pub mod metrics;
 pub mod pipeline;
+pub mod plot;
+pub mod table1;
+pub mod table2;
 pub mod sequence;
 pub mod stages;
 pub mod validation;

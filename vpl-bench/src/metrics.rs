@@ -1,4 +1,5 @@
-//! Image error metrics: relative MSE, RMSE, box downsampling.
+//! Error metrics: relative MSE, RMSE and box downsampling of images; the
+//! SMC paper's |E| and |E′| of tracked pixels over time.
 
 use vpl_core::glam::Vec3;
 use vpl_core::{CoreError, Image};
@@ -71,6 +72,66 @@ pub fn downsample(img: &Image, factor: u32) -> Result<Image, CoreError> {
     Ok(out)
 }
 
+/// Reinhard's global operator on the luminance of `c`: L/(1+L) (Reinhard et
+/// al. 2002, eq. 3 with L_white = ∞; the SMC paper measures after it).
+pub fn tone_mapped_luminance(c: Vec3) -> f64 {
+    let l = vpl_core::image::luminance(c).max(0.0) as f64;
+    l / (1.0 + l)
+}
+
+/// Standard error of [`tone_mapped_luminance`] of a mean with per-channel
+/// standard errors `se`: the luminance's error bounded by Σ w_c·se_c
+/// (channels fully correlated, the worst case) and carried through the
+/// operator's slope 1/(1+L)².
+pub fn tone_mapped_stderr(mean: Vec3, se: Vec3) -> f64 {
+    let l = vpl_core::image::luminance(mean).max(0.0) as f64;
+    let se_l = 0.2126 * se.x as f64 + 0.7152 * se.y as f64 + 0.0722 * se.z as f64;
+    se_l / ((1.0 + l) * (1.0 + l))
+}
+
+/// The SMC paper's error measures (§5.2, Table 1) of tracked pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TemporalError {
+    /// Average |E|: the mean over frames and pixels of |estimate − truth|.
+    pub e: f64,
+    /// Average |E′|: the mean over pixels and consecutive frame pairs of
+    /// |E(t+Δt) − E(t)| / Δt, with Δt = one frame (eq. 10).
+    pub e_prime: f64,
+    /// The mean signed error: above 0 when the estimate is brighter than the
+    /// truth on average (a bias shows here; noise averages out).
+    pub bias: f64,
+    /// Errors averaged into `e` (frames × pixels).
+    pub count: usize,
+    /// Differences averaged into `e_prime` ((frames − 1) × pixels).
+    pub count_prime: usize,
+}
+
+/// |E| and |E′| of `estimate` against `truth`, both indexed
+/// `[frame][pixel]` over consecutive frames (tone-mapped luminances).
+pub fn temporal_error(estimate: &[Vec<f64>], truth: &[Vec<f64>]) -> Result<TemporalError, CoreError> {
+    if estimate.len() != truth.len() || estimate.iter().zip(truth).any(|(a, b)| a.len() != b.len()) {
+        return Err(CoreError::Invalid("estimate and truth differ in frames or pixels".into()));
+    }
+    let err: Vec<Vec<f64>> = estimate.iter().zip(truth).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
+    let mut out = TemporalError::default();
+    let (mut s, mut sp, mut b) = (0.0, 0.0, 0.0);
+    for (f, row) in err.iter().enumerate() {
+        for (p, e) in row.iter().enumerate() {
+            s += e.abs();
+            b += e;
+            out.count += 1;
+            if f > 0 {
+                sp += (e - err[f - 1][p]).abs();
+                out.count_prime += 1;
+            }
+        }
+    }
+    out.e = if out.count > 0 { s / out.count as f64 } else { 0.0 };
+    out.bias = if out.count > 0 { b / out.count as f64 } else { 0.0 };
+    out.e_prime = if out.count_prime > 0 { sp / out.count_prime as f64 } else { 0.0 };
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +169,31 @@ mod tests {
         assert!((raw - var).abs() < 4.0 * se_mean, "raw {raw}, variance {var}, standard error {se_mean}");
         // Without the correction the error of a perfect image would be σ².
         assert!(raw > 0.9 * var);
+    }
+
+    /// |E| and |E′| on a 3-frame, 2-pixel series worked by hand:
+    /// errors e = [[0.1, −0.2], [0.3, −0.2], [0.0, 0.1]];
+    /// |E| = (0.1+0.2+0.3+0.2+0.0+0.1)/6 = 0.15;
+    /// differences [[0.2, 0.0], [−0.3, 0.3]], |E′| = 0.8/4 = 0.2.
+    #[test]
+    fn temporal_error_matches_hand_values() {
+        let truth = vec![vec![0.5, 0.4], vec![0.5, 0.4], vec![0.6, 0.2]];
+        let est = vec![vec![0.6, 0.2], vec![0.8, 0.2], vec![0.6, 0.3]];
+        let t = temporal_error(&est, &truth).unwrap();
+        assert!((t.e - 0.15).abs() < 1e-12, "{t:?}");
+        assert!((t.e_prime - 0.2).abs() < 1e-12, "{t:?}");
+        assert_eq!((t.count, t.count_prime), (6, 4));
+        // Signed: (0.1 − 0.2 + 0.3 − 0.2 + 0.0 + 0.1)/6 = 0.1/6.
+        assert!((t.bias - 0.1 / 6.0).abs() < 1e-12, "{t:?}");
+        // A constant offset has error but no flicker.
+        let off: Vec<Vec<f64>> = truth.iter().map(|r| r.iter().map(|x| x + 0.05).collect()).collect();
+        let t = temporal_error(&off, &truth).unwrap();
+        assert!((t.e - 0.05).abs() < 1e-12 && t.e_prime.abs() < 1e-12);
+        assert!(temporal_error(&est[..2], &truth).is_err());
+        // Reinhard: L = 1 maps to 1/2, L = 3 to 3/4; grey is its own luminance.
+        assert!((tone_mapped_luminance(Vec3::ONE) - 0.5).abs() < 1e-6);
+        assert!((tone_mapped_luminance(Vec3::splat(3.0)) - 0.75).abs() < 1e-6);
+        // Slope 1/(1+L)² = 1/4 at L = 1: a standard error of 0.1 in every channel becomes 0.025.
+        assert!((tone_mapped_stderr(Vec3::ONE, Vec3::splat(0.1)) - 0.025).abs() < 1e-6);
     }
 }

@@ -189,3 +189,30 @@ fn sequence_writes_frames_and_csvs() {
         assert!(err.lines().count() == 1 && err.contains(needle), "{args:?}: {err}");
     }
 }
+
+/// `vpl table1`, `vpl merge`, `vpl table2` and `vpl figures` on bad input:
+/// one line, exit code 2, nothing written.
+#[test]
+fn experiment_commands_refuse_bad_input_in_one_line() {
+    let dir = scratch("experiments");
+    let out = dir.join("t1");
+    let out_s = out.to_string_lossy().into_owned();
+    for (args, needle) in [
+        (vec!["table1", "--scene", "sponza", "--out", &out_s], "unknown sequence 'sponza'"),
+        (vec!["table1", "--methods", "nope", "--out", &out_s], "unknown method 'nope'"),
+        (vec!["table1", "--frames", "5000..5001", "--out", &out_s], "do not fit"),
+        (vec!["table1", "--shard", "2/2", "--out", &out_s], "index must be below"),
+        (vec!["merge", &out_s], "no Table 1 run"),
+        (vec!["table2", "--frames", "0", "--out", &out_s], "--frames must be at least 1"),
+        (vec!["figures", "--only", "9", "--out", &out_s], "no figure 9"),
+        (vec!["figures", "--scenes", "nowhere", "--out", &out_s], "nowhere"),
+    ] {
+        let o = vpl().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("vpl: error: ") && err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+        assert!(!out.exists(), "{args:?}: wrote {}", out.display());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -117,6 +117,15 @@ impl SceneSetup {
         Ok(SceneSetup { scene, camera, sequence, warnings, description })
     }
 
+    /// The same scene with the animation `spec` instead of its own (checked
+    /// as a scene file's `[sequence]` is; `vpl export-scene` then writes it).
+    pub fn with_sequence(mut self, spec: SequenceSpec) -> Result<SceneSetup> {
+        let n_lights = self.description.lights.as_ref().map_or(0, |l| l.len());
+        self.sequence = Some(sequence_from_spec(&spec, n_lights)?);
+        self.description.sequence = Some(spec);
+        Ok(self)
+    }
+
     /// Scene and camera at frame `frame` of the sequence (frame 0 without one).
     pub fn frame(&self, frame: u32) -> Result<(Scene, Camera)> {
         let Some(seq) = &self.sequence else {

@@ -30,4 +30,4 @@ pub mod render;
 pub use integrator::PathTracer;
 pub use vpl_core::Mode;
 pub use radiosity::PathRadiosity;
-pub use render::{pixel, render, track, Accumulator, RenderError, RenderOutput, RenderSettings, TrackedPixel};
+pub use render::{pixel, render, track, track_with, Accumulator, Footprint, RenderError, RenderOutput, RenderSettings, TrackedPixel};

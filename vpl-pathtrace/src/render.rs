@@ -174,10 +174,26 @@ pub struct TrackedPixel {
 /// Samples per work item of [`track`]; fixed so results do not depend on threads.
 pub const TRACK_BATCH: u32 = 4096;
 
+/// Where in a pixel the camera rays of [`track_with`] start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Footprint {
+    /// Uniformly over the pixel's square (a box-filtered pixel, as [`render`] makes).
+    Box,
+    /// Through the pixel's centre only: the radiance leaving the one surface
+    /// point a G-buffer stores for the pixel, which is what a VPL renderer shades.
+    Centre,
+}
+
 /// Many samples at a few pixels (the papers' per-pixel ground truth), with
 /// standard errors. Work is split into batches of [`TRACK_BATCH`] samples,
 /// each with its own stream, and reduced in a fixed order.
 pub fn track(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u32)], spp: u32, seed: u64, frame: u64) -> Vec<TrackedPixel> {
+    track_with(scene, camera, pt, pixels, spp, seed, frame, Footprint::Box)
+}
+
+/// [`track`] with a choice of where in the pixel the camera rays start.
+#[allow(clippy::too_many_arguments)]
+pub fn track_with(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u32)], spp: u32, seed: u64, frame: u64, footprint: Footprint) -> Vec<TrackedPixel> {
     let batches = spp.div_ceil(TRACK_BATCH);
     let items: Vec<(usize, u32)> = (0..pixels.len()).flat_map(|p| (0..batches).map(move |b| (p, b))).collect();
     let accs: Vec<Accumulator> = items
@@ -188,7 +204,10 @@ pub fn track(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u3
             let mut rng = stream(seed, frame, Purpose::TRACKED, ((p as u64) << 32) | b as u64);
             let mut acc = Accumulator::default();
             for _ in 0..n {
-                let (u, v) = rng.next_2d();
+                let (u, v) = match footprint {
+                    Footprint::Box => rng.next_2d(),
+                    Footprint::Centre => (0.5, 0.5),
+                };
                 let lens = rng.next_2d();
                 acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
             }

@@ -1,9 +1,12 @@
 //! `cargo xtask …`: the toolkit's jobs.
 //!
-//! - `cargo xtask reproduce [--quick | --full] [--only LIST]`: the scene
-//!   gallery (`results/scenes/`), path-traced references of every built-in
-//!   scene (`results/references/`), the path tracer's validation against
-//!   Mitsuba 3 (`results/validation/`), and `results/README.md`.
+//! - `cargo xtask reproduce [--quick | --full] [--only LIST] [--scene S,..] [--methods M,..]
+//!   [--frames A..B] [--shard I/N]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
+//!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Georgiev's RR experiment,
+//!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
+//!   and `results/README.md` linking all of it. `--shard I/N` runs shard I of Table 1's units
+//!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
+//! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
 //! - `cargo xtask test`: the whole test suite, as CI runs it.
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
 //! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and
@@ -14,7 +17,7 @@ use std::process::{Command, ExitCode};
 use std::time::Instant;
 
 const SCENES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
-const JOBS: [&str; 4] = ["scenes", "references", "validation", "georgiev"];
+const JOBS: [&str; 8] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "fig8", "fig10"];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -32,13 +35,15 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10] \
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
 }
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => reproduce(&args[1..]),
+        Some("merge") => merge(&args[1..]),
         Some("test") => test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
@@ -88,67 +93,160 @@ struct Profile {
     validation_spp: u32,
     georgiev_spp: u32,
     georgiev_frames: u32,
+    table2: (&'static str, u32),
+    figures: &'static [&'static str],
 }
 
+const QUICK: Profile = Profile {
+    name: "quick",
+    gallery_spp: 64,
+    reference_spp: 64,
+    validation_spp: 1024,
+    georgiev_spp: 2048,
+    georgiev_frames: 8,
+    table2: ("640x360", 10),
+    figures: &["--scenes", "office", "--fig10-scenes", "atrium", "--spp", "256", "--fig10-spp", "1024", "--shadow-maps", "128,256", "--fig10-size", "160x120", "--fig10-warmup", "20"],
+};
+
+const FULL: Profile = Profile {
+    name: "full",
+    gallery_spp: 1024,
+    reference_spp: 4096,
+    validation_spp: 32768,
+    georgiev_spp: 16384,
+    georgiev_frames: 32,
+    table2: ("1920x1080", 30),
+    figures: &[
+        "--scenes", "office,atrium", "--fig10-scenes", "atrium,courtyard,office", "--spp", "32768", "--fig10-spp", "8192", "--shadow-maps", "128,256,512,1024", "--fig10-size", "320x240",
+        "--fig10-warmup", "100",
+    ],
+};
+
+/// Folder of the README sections each job leaves (so `cargo xtask merge` can rebuild the README).
+fn sections() -> PathBuf {
+    root().join("results/.sections")
+}
+
+fn save_section(job: &str, text: &str, seconds: Option<f64>) -> Result<(), String> {
+    let dir = sections();
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    write_atomic(&dir.join(format!("{job}.md")), text)?;
+    if let Some(s) = seconds {
+        write_atomic(&dir.join(format!("{job}.seconds")), &format!("{s:.0}"))?;
+    }
+    Ok(())
+}
+
+/// `results/README.md` from the sections of every job run so far, in job order.
+fn write_readme(header: &str) -> Result<(), String> {
+    let mut readme = String::from(header);
+    let mut timings = String::from("## Wall time\n\n| job | seconds |\n| --- | ---: |\n");
+    let mut total = 0.0;
+    for job in JOBS {
+        if let Ok(text) = std::fs::read_to_string(sections().join(format!("{job}.md"))) {
+            readme.push_str(&text);
+        }
+        if let Ok(t) = std::fs::read_to_string(sections().join(format!("{job}.seconds"))) {
+            timings.push_str(&format!("| {job} | {} |\n", t.trim()));
+            total += t.trim().parse::<f64>().unwrap_or(0.0);
+        }
+    }
+    timings.push_str(&format!("| all | {total:.0} |\n\n"));
+    readme.push_str(&timings);
+    if let Ok(run) = std::fs::read_to_string(sections().join("run.md")) {
+        readme.push_str(&run);
+    }
+    write_atomic(&root().join("results/README.md"), &readme)
+}
+
+const README_HEADER: &str = "# Results\n\nWritten by `cargo xtask reproduce` (and `cargo xtask merge` after a sharded run). \
+Each section comes from the newest run of its job; the wall times below are of those runs.\n\n\
+- [Table 1](table1/table1.md): |E| and |E′| of IR, RR, MIR, TCAS and SMC on five sequences, with Fig. 7 ([`table1/`](table1/))\n\
+- [Table 2](table2/table2.md): milliseconds per stage of an SMC frame\n\
+- [Figs. 8 and 9](figures/fig8.md): one frame by path tracing and by VPLs; shadow-map resolutions\n\
+- [Fig. 10](figures/fig10.md): error against the VPL budget\n\
+- [Georgiev](georgiev/georgiev.md), [validation](validation/cornell_validation.md), path-traced references, the scene gallery\n\n";
+
 fn reproduce(args: &[String]) -> Result<(), String> {
-    let mut profile = Profile { name: "quick", gallery_spp: 64, reference_spp: 64, validation_spp: 1024, georgiev_spp: 2048, georgiev_frames: 8 };
+    let mut profile = &QUICK;
     let mut only: Vec<String> = JOBS.iter().map(|s| s.to_string()).collect();
+    let mut table1_args: Vec<String> = Vec::new();
+    let mut shard: Option<String> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--quick" => {}
-            "--full" => profile = Profile { name: "full", gallery_spp: 1024, reference_spp: 4096, validation_spp: 32768, georgiev_spp: 16384, georgiev_frames: 32 },
+            "--quick" => profile = &QUICK,
+            "--full" => profile = &FULL,
             "--only" => {
                 let list = it.next().ok_or("--only needs a list")?;
-                only = list.split(',').map(|s| s.trim().to_string()).collect();
-                if let Some(bad) = only.iter().find(|j| !JOBS.contains(&j.as_str())) {
-                    return Err(format!("unknown job '{bad}' (jobs: {})", JOBS.join(", ")));
+                only = Vec::new();
+                for j in list.split(',').map(|s| s.trim()) {
+                    let j = match j {
+                        "fig7" => "table1",
+                        "fig9" => "fig8",
+                        j => j,
+                    };
+                    if !JOBS.contains(&j) {
+                        return Err(format!("unknown job '{j}' (jobs: {}, fig7, fig9)", JOBS.join(", ")));
+                    }
+                    if !only.iter().any(|o| o == j) {
+                        only.push(j.to_string());
+                    }
                 }
             }
+            "--scene" | "--methods" | "--frames" => {
+                let v = it.next().ok_or_else(|| format!("{a} needs a value"))?;
+                table1_args.push(a.clone());
+                table1_args.push(v.clone());
+            }
+            "--shard" => shard = Some(it.next().ok_or("--shard needs I/N")?.clone()),
             other => return Err(format!("unknown argument '{other}'\n{}", usage())),
         }
+    }
+    // Sharded: shard i runs its share of Table 1; shard 0 also runs every other job.
+    let first_shard = shard.as_deref().is_none_or(|s| s.trim().starts_with("0/"));
+    if !first_shard {
+        only.retain(|j| j == "table1");
     }
     let start = Instant::now();
     let vpl = build_vpl()?;
     let results = root().join("results");
-    let mut readme = String::from("# Results\n\nWritten by `cargo xtask reproduce`");
-    readme.push_str(&format!(" (profile `{}`).\n\n", profile.name));
-    let mut timings = Vec::new();
+    let job = |name: &str| only.iter().any(|j| j == name);
 
-    if only.iter().any(|j| j == "scenes") {
+    if job("scenes") {
         let t = Instant::now();
         let dir = results.join("scenes");
         std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-        readme.push_str(&format!("## Scene gallery (`scenes/`)\n\nEvery built-in scene at frame 0, path traced (full, max-depth 5, {} spp).\n\n", profile.gallery_spp));
+        let mut md = format!("## Scene gallery (`scenes/`)\n\nEvery built-in scene at frame 0, path traced (full, max-depth 5, {} spp).\n\n", profile.gallery_spp);
         for (i, s) in SCENES.iter().enumerate() {
             eprintln!("xtask: [scenes {}/{}] {s}", i + 1, SCENES.len());
             render(&vpl, s, "full", profile.gallery_spp, &dir.join(format!("{s}.exr")), None)?;
-            readme.push_str(&format!("![{s}](scenes/{s}.png) "));
+            md.push_str(&format!("![{s}](scenes/{s}.png) "));
         }
-        readme.push_str("\n\n");
-        timings.push(("scenes", t.elapsed().as_secs_f64()));
+        md.push_str("\n\n");
+        save_section("scenes", &md, Some(t.elapsed().as_secs_f64()))?;
     }
-    if only.iter().any(|j| j == "references") {
+    if job("references") {
         let t = Instant::now();
         let dir = results.join("references");
         std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-        readme.push_str(&format!(
+        let mut md = format!(
             "## Path-traced references (`references/`)\n\nFrame 0 of every built-in scene, max-depth 5, {} spp, in `full` and `indirect` mode (what VPL methods render), \
              each with its per-pixel standard-error EXR.\n\n| scene | full | indirect |\n| --- | --- | --- |\n",
             profile.reference_spp
-        ));
+        );
         for (i, s) in SCENES.iter().enumerate() {
             for mode in ["full", "indirect"] {
                 eprintln!("xtask: [references {}/{}] {s} {mode}", i + 1, SCENES.len());
                 let out = dir.join(format!("{s}_{mode}.exr"));
                 render(&vpl, s, mode, profile.reference_spp, &out, Some(&dir.join(format!("{s}_{mode}_stderr.exr"))))?;
             }
-            readme.push_str(&format!("| {s} | [exr]({0}_full.exr) ![]({0}_full.png) | [exr]({0}_indirect.exr) ![]({0}_indirect.png) |\n", format!("references/{s}")));
+            md.push_str(&format!("| {s} | [exr]({0}_full.exr) ![]({0}_full.png) | [exr]({0}_indirect.exr) ![]({0}_indirect.png) |\n", format!("references/{s}")));
         }
-        readme.push('\n');
-        timings.push(("references", t.elapsed().as_secs_f64()));
+        md.push('\n');
+        save_section("references", &md, Some(t.elapsed().as_secs_f64()))?;
     }
-    if only.iter().any(|j| j == "validation") {
+    if job("validation") {
         let t = Instant::now();
         eprintln!("xtask: [validation] cornell vs Mitsuba 3.9.1 at {} spp", profile.validation_spp);
         let dir = results.join("validation");
@@ -156,20 +254,14 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         c.current_dir(root()).args(["validate-cornell", "--spp", &profile.validation_spp.to_string(), "--out"]).arg(&dir);
         c.stdout(std::process::Stdio::null());
         run(c, "vpl validate-cornell")?;
-        readme.push_str("## Validation against Mitsuba 3 (`validation/`)\n\n");
-        let md = std::fs::read_to_string(dir.join("cornell_validation.md")).map_err(|e| e.to_string())?;
-        readme.push_str(md.trim_start_matches("# Path tracer vs Mitsuba 3.9.1 on `cornell`\n\n"));
-        readme.push_str("\nDifference (ours − Mitsuba) and |z| images: `validation/cornell_<mode>_difference.exr`, `validation/cornell_<mode>_z.exr`; \
+        let mut md = String::from("## Validation against Mitsuba 3 (`validation/`)\n\n");
+        let text = std::fs::read_to_string(dir.join("cornell_validation.md")).map_err(|e| e.to_string())?;
+        md.push_str(text.trim_start_matches("# Path tracer vs Mitsuba 3.9.1 on `cornell`\n\n"));
+        md.push_str("\nDifference (ours − Mitsuba) and |z| images: `validation/cornell_<mode>_difference.exr`, `validation/cornell_<mode>_z.exr`; \
          failing pixels in red: ![full](validation/cornell_full_z.png) ![direct](validation/cornell_direct_z.png) ![indirect](validation/cornell_indirect_z.png)\n\n");
-        timings.push(("validation", t.elapsed().as_secs_f64()));
+        save_section("validation", &md, Some(t.elapsed().as_secs_f64()))?;
     }
-    readme.push_str("## Run\n\n| job | wall time (s) |\n| --- | --- |\n");
-    for (j, s) in &timings {
-        readme.push_str(&format!("| {j} | {s:.0} |\n"));
-    }
-    readme.push_str(&format!("| total | {:.0} |\n", start.elapsed().as_secs_f64()));
-    let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    if only.iter().any(|j| j == "georgiev") {
+    if job("georgiev") {
         let t = Instant::now();
         eprintln!("xtask: [georgiev] RR against IR on corner, reference {} spp, {} frames", profile.georgiev_spp, profile.georgiev_frames);
         let dir = results.join("georgiev");
@@ -179,16 +271,101 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             .arg(&dir)
             .stdout(std::process::Stdio::null());
         run(c, "vpl georgiev")?;
-        let md = std::fs::read_to_string(dir.join("georgiev.md")).map_err(|e| e.to_string())?;
-        readme.push_str("## Russian-roulette acceptance (`georgiev/`)\n\n");
-        let body = md.trim_start_matches("# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n\n");
-        readme.push_str(&body.replace("](corner_", "](georgiev/corner_"));
-        readme.push_str("\nData: `georgiev/georgiev.csv`.\n\n");
-        timings.push(("georgiev", t.elapsed().as_secs_f64()));
+        let text = std::fs::read_to_string(dir.join("georgiev.md")).map_err(|e| e.to_string())?;
+        let mut md = String::from("## Russian-roulette acceptance (`georgiev/`)\n\n");
+        let body = text.trim_start_matches("# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n\n");
+        md.push_str(&body.replace("](corner_", "](georgiev/corner_"));
+        md.push_str("\nData: `georgiev/georgiev.csv`.\n\n");
+        save_section("georgiev", &md, Some(t.elapsed().as_secs_f64()))?;
     }
-    readme.push_str(&format!("\nMachine: {threads} hardware threads. Command: `cargo xtask reproduce {}`.\n", args.join(" ")));
-    write_atomic(&results.join("README.md"), &readme)?;
+    if job("table1") {
+        let t = Instant::now();
+        let dir = results.join("table1");
+        eprintln!("xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})", profile.name, shard.as_deref().map_or(String::new(), |s| format!(", shard {s}")));
+        let mut c = Command::new(&vpl);
+        c.current_dir(root()).args(["table1", "--profile", profile.name]).args(&table1_args).arg("--out").arg(&dir);
+        if let Some(s) = &shard {
+            c.args(["--shard", s]);
+        }
+        run(c, "vpl table1")?;
+        if shard.is_none() {
+            table1_section(Some(t.elapsed().as_secs_f64()))?;
+        } else {
+            save_section(
+                "table1",
+                &format!("## Table 1 (`table1/`)\n\nShard {} of a sharded run is done; when every shard is, `cargo xtask merge` writes the tables here.\n\n", shard.as_deref().unwrap_or("")),
+                None,
+            )?;
+        }
+    }
+    if job("table2") {
+        let t = Instant::now();
+        eprintln!("xtask: [table2] SMC stage timings at {}", profile.table2.0);
+        let dir = results.join("table2");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root()).args(["table2", "--size", profile.table2.0, "--frames", &profile.table2.1.to_string(), "--out"]).arg(&dir);
+        run(c, "vpl table2")?;
+        let text = std::fs::read_to_string(dir.join("table2.md")).map_err(|e| e.to_string())?;
+        let md = format!("## Table 2 (`table2/`)\n\n{}\n", text.trim_start_matches("# Table 2: milliseconds per stage of an SMC frame\n\n").replace("## ", "### "));
+        save_section("table2", &md, Some(t.elapsed().as_secs_f64()))?;
+    }
+    for (name, fig) in [("fig8", "8"), ("fig10", "10")] {
+        if !job(name) {
+            continue;
+        }
+        let t = Instant::now();
+        eprintln!("xtask: [{name}] Fig. {fig}{}", if fig == "8" { " and Fig. 9" } else { "" });
+        let dir = results.join("figures");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root()).args(["figures", "--only", fig]).args(profile.figures).arg("--out").arg(&dir);
+        run(c, &format!("vpl figures --only {fig}"))?;
+        let text = std::fs::read_to_string(dir.join(format!("{name}.md"))).map_err(|e| e.to_string())?;
+        let body = text.split_once("\n\n").map_or(text.as_str(), |(_, b)| b);
+        let title = if fig == "8" { "Figs. 8 and 9" } else { "Fig. 10" };
+        let md = format!("## {title} (`figures/{name}.md`)\n\n{}\n", fix_links(&body.replace("## ", "### "), "figures/"));
+        save_section(name, &md, Some(t.elapsed().as_secs_f64()))?;
+    }
+    let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    save_section(
+        "run",
+        &format!("Last run: `cargo xtask reproduce {}` (profile `{}`) on {threads} hardware threads, {:.0} s.\n", args.join(" "), profile.name, start.elapsed().as_secs_f64()),
+        None,
+    )?;
+    write_readme(README_HEADER)?;
     eprintln!("xtask: done in {:.0} s; see results/README.md", start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// Image links of a job's Markdown made relative to `results/`.
+fn fix_links(md: &str, prefix: &str) -> String {
+    md.replace("](", &format!("]({prefix}"))
+}
+
+/// The README section of Table 1 from `results/table1/table1.md`.
+fn table1_section(seconds: Option<f64>) -> Result<(), String> {
+    let dir = root().join("results/table1");
+    let text = std::fs::read_to_string(dir.join("table1.md")).map_err(|e| format!("{}: {e}", dir.join("table1.md").display()))?;
+    let body = text.trim_start_matches("# Table 1: error and temporal instability of the VPL samplers\n\n").replace("## ", "### ");
+    let mut md = format!("## Table 1 and Fig. 7 (`table1/`)\n\n{body}\n");
+    for id in ["courtyard-sun", "office", "maze"] {
+        if dir.join(format!("fig7_{id}.png")).exists() {
+            md.push_str(&format!("![Fig. 7, {id}](table1/fig7_{id}.png)\n"));
+        }
+    }
+    md.push_str("\nData: `table1/table1.csv`, `table1/table1.json`, `table1/fig7.csv`; timings per run: `table1/runs.csv`.\n\n");
+    save_section("table1", &md, seconds)
+}
+
+fn merge(args: &[String]) -> Result<(), String> {
+    let dir = args.first().map(PathBuf::from).unwrap_or_else(|| root().join("results/table1"));
+    let vpl = build_vpl()?;
+    let mut c = Command::new(vpl);
+    c.current_dir(root()).arg("merge").arg(&dir);
+    run(c, "vpl merge")?;
+    if dir == root().join("results/table1") {
+        table1_section(None)?;
+        write_readme(README_HEADER)?;
+    }
     Ok(())
 }
 
@@ -202,6 +379,6 @@ fn render(vpl: &Path, scene: &str, mode: &str, spp: u32, out: &Path, stderr: Opt
 }
 
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
-    let tmp = path.with_extension("md.tmp");
+    let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }

@@ -20,6 +20,14 @@ struct Cli {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ProfileArg {
+    /// Minutes on a laptop.
+    Quick,
+    /// The paper's settings.
+    Full,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Method {
     /// Path tracing (the reference).
     Path,
@@ -305,6 +313,110 @@ enum Command {
         #[arg(long, default_value_t = 2048)]
         vpls: usize,
     },
+    /// Table 1 of the SMC paper (|E| and |E′| of eight tracked pixels over five sequences): run the
+    /// units of a shard into --out; without --shard, also merge them into table1.md, .csv, .json and
+    /// the Fig. 7 plots.
+    Table1 {
+        /// Settings: quick (8 frames a sequence, 65 536 truth samples) or full (whole sequences,
+        /// 692 100 truth samples: the paper's).
+        #[arg(long, value_enum, default_value_t = ProfileArg::Quick)]
+        profile: ProfileArg,
+        /// Sequences (comma-separated; default all: office, courtyard, maze, atrium, courtyard-sun).
+        #[arg(long = "scene", value_delimiter = ',')]
+        scenes: Vec<String>,
+        /// Methods (comma-separated registry names; default ir, rr, mir-resample, tcas, smc).
+        #[arg(long, value_delimiter = ',')]
+        methods: Vec<String>,
+        /// Frames A..B (or A.. to the end) of every sequence instead of the profile's.
+        #[arg(long)]
+        frames: Option<FramesArg>,
+        /// Image size (default 320x240).
+        #[arg(long)]
+        size: Option<Size>,
+        /// Path-traced samples per tracked pixel and frame of ground truth.
+        #[arg(long)]
+        truth_spp: Option<u32>,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Run only shard I of N (units k with k mod N = I); merge later with `vpl merge`.
+        #[arg(long)]
+        shard: Option<vpl_bench::table1::Shard>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder (unit files under units/, the tables beside).
+        #[arg(long)]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Table 2 of the SMC paper: milliseconds per stage of an SMC frame on courtyard, office, atrium
+    /// (2048 VPLs) and maze (512); table2.md, .csv, .json.
+    Table2 {
+        /// Image size.
+        #[arg(long, default_value = "640x360")]
+        size: Size,
+        /// Frames timed per scene (after one warm-up frame).
+        #[arg(long, default_value_t = 10)]
+        frames: u32,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Figs. 8, 9 and 10 of the SMC paper: one frame by path tracing, clamped path tracing and three
+    /// ways of shading the same VPLs; shadow-map resolutions against ray tracing; error against the
+    /// VPL budget. fig8.md, fig10.md with images, CSV, JSON and a plot.
+    Figures {
+        /// Scenes of Figs. 8 and 9 (comma-separated; frame 0 of each).
+        #[arg(long, value_delimiter = ',', default_value = "office")]
+        scenes: Vec<String>,
+        /// Scenes of Fig. 10.
+        #[arg(long, value_delimiter = ',', default_value = "atrium")]
+        fig10_scenes: Vec<String>,
+        /// Image size of Figs. 8 and 9.
+        #[arg(long, default_value = "320x240")]
+        size: Size,
+        /// Image size of Fig. 10.
+        #[arg(long, default_value = "160x120")]
+        fig10_size: Size,
+        /// Samples per pixel of the path-traced references of Figs. 8 and 9.
+        #[arg(long, default_value_t = 256)]
+        spp: u32,
+        /// Samples per pixel of the path-traced references of Fig. 10.
+        #[arg(long, default_value_t = 1024)]
+        fig10_spp: u32,
+        /// Shadow-map sides of Fig. 9.
+        #[arg(long, value_delimiter = ',', default_value = "128,256")]
+        shadow_maps: Vec<u32>,
+        /// VPL budgets of Fig. 10.
+        #[arg(long, value_delimiter = ',', default_value = "2000,8000,40000")]
+        budgets: Vec<usize>,
+        /// SMC warm-up iterations in Fig. 10.
+        #[arg(long, default_value_t = 20)]
+        fig10_warmup: u32,
+        /// Which figures: 8 (with 9), 10 or both.
+        #[arg(long, value_delimiter = ',', default_value = "8,10")]
+        only: Vec<u32>,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Merge the unit files of a sharded Table 1 run (all shards done) into its tables and plots.
+    Merge {
+        /// The run's output folder.
+        dir: PathBuf,
+    },
     /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
     ValidateCornell {
         /// Samples per pixel.
@@ -565,6 +677,134 @@ fn run(cli: Cli) -> Res<()> {
                     out.display()
                 );
             }
+            Ok(())
+        }
+        Command::Table1 { profile, scenes, methods, frames, size, truth_spp, seed, shard, threads, out, quiet } => {
+            use vpl_bench::table1::{self, Table1Spec};
+            let mut spec = match profile {
+                ProfileArg::Quick => Table1Spec::quick(),
+                ProfileArg::Full => Table1Spec::full().map_err(|e| e.to_string())?,
+            };
+            let custom = !scenes.is_empty() || !methods.is_empty() || frames.is_some() || size.is_some() || truth_spp.is_some() || seed != 0;
+            if !scenes.is_empty() {
+                let ids = table1::row_ids();
+                if let Some(bad) = scenes.iter().find(|s| !ids.contains(&s.as_str())) {
+                    return Err(format!("--scene: unknown sequence '{bad}' (sequences: {})", ids.join(", ")));
+                }
+                spec.rows.retain(|r| scenes.contains(&r.id));
+            }
+            if !methods.is_empty() {
+                spec.methods = methods;
+            }
+            if let Some(f) = frames {
+                for r in &mut spec.rows {
+                    let n = table1::rows::row(&r.id).map(|row| row.frame_count()).transpose().map_err(|e| e.to_string())?.unwrap_or(1);
+                    let range = f.range(n);
+                    r.start = range.start;
+                    r.end = range.end;
+                }
+            }
+            if let Some(Size(w, h)) = size {
+                spec.size = (w, h);
+            }
+            if let Some(n) = truth_spp {
+                spec.truth_spp = n;
+            }
+            spec.seed = seed;
+            if custom {
+                spec.profile = format!("{}+custom", spec.profile);
+            }
+            spec.validate().map_err(|e| e.to_string())?;
+            if out.exists() && !out.is_dir() {
+                return Err(format!("--out {} is not a directory", out.display()));
+            }
+            std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            let pool = pool(threads)?;
+            let shard_arg = shard.unwrap_or(table1::Shard::ALL);
+            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr()) };
+            bar.set_style(ProgressStyle::with_template("table1 {elapsed_precise} [{bar:40}] {pos}/{len} frames {msg}, eta {eta}").unwrap().progress_chars("=> "));
+            let summary = pool
+                .install(|| {
+                    table1::run(&spec, &out, shard_arg, &mut |p| {
+                        bar.set_length(p.total);
+                        bar.set_position(p.done);
+                        if !p.message.is_empty() {
+                            bar.set_message(p.message.clone());
+                        }
+                    })
+                })
+                .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
+            if !quiet {
+                eprintln!(
+                    "vpl: table1 shard {}/{}: {} units run, {} already done, of {} in the run; {:.0} s",
+                    shard_arg.index, shard_arg.count, summary.ran, summary.kept, summary.total_units, summary.seconds
+                );
+            }
+            if shard.is_none() {
+                pool.install(|| table1::merge(&out)).map_err(|e| e.to_string())?;
+                if !quiet {
+                    eprintln!("vpl: table1 -> {}", out.join("table1.md").display());
+                }
+            }
+            Ok(())
+        }
+        Command::Table2 { size: Size(w, h), frames, threads, out } => {
+            if frames == 0 {
+                return Err("--frames must be at least 1".into());
+            }
+            let pool = pool(threads)?;
+            std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            let mut rows = Vec::new();
+            for (paper, scene, _, vpls, _) in vpl_bench::table2::PAPER {
+                eprintln!("vpl: table2: {scene} ({vpls} VPLs, {w}x{h}, {frames} frames)");
+                let start = vpl_bench::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
+                rows.push(pool.install(|| vpl_bench::table2::time_scene(scene, paper, (w, h), vpls, start, frames)).map_err(|e| e.to_string())?);
+            }
+            vpl_bench::table2::write(&out, &rows, (w, h), frames, pool.current_num_threads()).map_err(|e| e.to_string())?;
+            eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
+            Ok(())
+        }
+        Command::Figures { scenes, fig10_scenes, size: Size(w, h), fig10_size: Size(w10, h10), spp, fig10_spp, shadow_maps, budgets, fig10_warmup, only, seed, threads, out } => {
+            use vpl_bench::figures;
+            if spp == 0 || fig10_spp == 0 || budgets.contains(&0) || shadow_maps.is_empty() {
+                return Err("--spp and --budgets must be positive and --shadow-maps not empty".into());
+            }
+            if let Some(bad) = only.iter().find(|f| **f != 8 && **f != 10) {
+                return Err(format!("--only: no figure {bad} (8 or 10)"));
+            }
+            for sc in scenes.iter().chain(&fig10_scenes) {
+                SceneSetup::load(sc).map_err(|e| e.to_string())?;
+            }
+            let pool = pool(threads)?;
+            std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            let settings = figures::FigureSettings { size: (w, h), reference_spp: spp, shadow_map_sides: shadow_maps, budgets, fig10_size: (w10, h10), fig10_spp, fig10_warmup, seed };
+            if only.contains(&8) {
+                let mut figs = Vec::new();
+                for sc in &scenes {
+                    eprintln!("vpl: figures: Figs. 8 and 9 on {sc}");
+                    let (a, b) = pool.install(|| figures::fig8_9(&out, sc, 0, &settings)).map_err(|e| e.to_string())?;
+                    figs.push((sc.clone(), a, b));
+                }
+                figures::write_fig8(&out, &figs, &settings).map_err(|e| e.to_string())?;
+            }
+            if only.contains(&10) {
+                let mut figs = Vec::new();
+                for sc in &fig10_scenes {
+                    eprintln!("vpl: figures: Fig. 10 on {sc}");
+                    figs.push((sc.clone(), pool.install(|| figures::fig10(&out, sc, &settings)).map_err(|e| e.to_string())?));
+                }
+                figures::write_fig10(&out, &figs, &settings).map_err(|e| e.to_string())?;
+            }
+            eprintln!("vpl: figures -> {}", out.display());
+            Ok(())
+        }
+        Command::Merge { dir } => {
+            if !dir.join("spec.json").exists() {
+                return Err(format!("{} holds no Table 1 run (no spec.json)", dir.display()));
+            }
+            vpl_bench::table1::merge(&dir).map_err(|e| e.to_string())?;
+            eprintln!("vpl: merged -> {}", dir.join("table1.md").display());
             Ok(())
         }
         Command::ExportScene { name, out } => {

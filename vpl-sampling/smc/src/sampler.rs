@@ -23,8 +23,13 @@ pub struct Particle {
     pub y: SurfacePoint,
     /// Stable id: seeds its radiosity paths for its whole life.
     pub id: u64,
-    /// Exitant radiance L(y), from [`RadiosityEstimator`].
+    /// Exitant radiance L(y) that the VPL's flux uses, from
+    /// [`RadiosityEstimator`] with paths of its own: independent of
+    /// `selection_radiance`, so choosing VPLs by intensity does not bias it.
     pub radiance: Vec3,
+    /// The estimate of L(y) that intensities (eq. 6), and so every keep,
+    /// remove and add decision, use: the candidate's estimate.
+    pub selection_radiance: Vec3,
     /// Area density p(y) among the VPLs (eq. 7 with the rendering k).
     pub density: f32,
     /// The mailbox: a camera point that saw y (§3.2.2).
@@ -32,9 +37,10 @@ pub struct Particle {
 }
 
 impl Particle {
-    /// Intensity I(y) = L(y) / p(y) (eq. 6), by luminance.
+    /// Intensity I(y) = L(y) / p(y) (eq. 6), by luminance, with the
+    /// selection estimate of L(y).
     pub fn intensity(&self) -> f32 {
-        intensity(self.radiance, self.density)
+        intensity(self.selection_radiance, self.density)
     }
 }
 
@@ -194,6 +200,25 @@ impl SmcSampler {
         mix64(seed ^ mix64(id.wrapping_add(0x5EC0_0001)))
     }
 
+    /// The seed of VPL `id`'s second, rendering radiosity: independent of
+    /// the one its selection used.
+    ///
+    /// Algorithm 1 keeps the candidates of largest estimated intensity and
+    /// removes the VPLs of smallest, and the paper renders with those same
+    /// 16-path estimates (re-estimated with the VPL's own seed, so unchanged).
+    /// Selecting on a noisy estimate and then using it is the winner's curse:
+    /// the kept VPLs are those whose noise came out high. Measured on
+    /// `office` (frame 600, 2048 VPLs, exhaustive ray-traced shading, no
+    /// clamp) the image was 67 % brighter than path tracing, and 56 % with
+    /// k = 32, so the kNN densities were not the cause. A second estimate per
+    /// VPL, seeded apart and made once when it joins Y (and again when the
+    /// lights change), carries the flux; it is independent of every decision,
+    /// so the flux is unbiased given the positions, and it stays fixed for
+    /// the VPL's life, so it costs no temporal coherence.
+    fn render_seed(seed: u64, id: u64) -> u64 {
+        mix64(seed ^ mix64(id.wrapping_add(0x5EC0_0002)).rotate_left(17))
+    }
+
     /// One iteration of Algorithm 1 (lines 3–19) for `camera` over `scene`.
     /// The first call initialises Y from candidates (line 1).
     pub fn iterate(&mut self, scene: &Scene, camera: &Camera, seed: u64) -> &VplSet {
@@ -325,25 +350,41 @@ impl SmcSampler {
         // Lines 14–17: fill empty slots with the strongest candidates.
         cands.sort_by(|a, b| b.intensity.total_cmp(&a.intensity).then(a.id.cmp(&b.id)));
         let mut next = cands.into_iter();
+        let mut added = Vec::new();
         for s in 0..c.vpls {
             if self.particles[s].is_some() {
                 continue;
             }
             let Some(k) = next.next() else { break };
-            self.particles[s] = Some(Particle { y: k.hit.y, id: k.id, radiance: k.radiance, density: 0.0, anchor: xs[k.hit.origin as usize] });
+            self.particles[s] = Some(Particle { y: k.hit.y, id: k.id, radiance: Vec3::ZERO, selection_radiance: k.radiance, density: 0.0, anchor: xs[k.hit.origin as usize] });
+            added.push(s);
             st.added += 1;
         }
         tm.candidates_ms += ms(t0);
 
         // Line 18: radiosities of the set, anew only when the lighting changed
-        // (otherwise the same seeds would give the same values).
+        // (otherwise the same seeds would give the same values); the
+        // rendering radiosity of a VPL that just joined Y ([`Self::render_seed`]).
         let t0 = Instant::now();
         let key = LightingKey::of(scene);
+        let est = &self.estimator;
         if self.lighting.as_ref() != Some(&key) {
             st.relit = self.lighting.is_some();
-            let est = &self.estimator;
-            self.particles.par_iter_mut().flatten().for_each(|p| p.radiance = est.radiosity(scene, &p.y, Self::radiosity_seed(seed, p.id)));
+            self.particles.par_iter_mut().flatten().for_each(|p| {
+                p.selection_radiance = est.radiosity(scene, &p.y, Self::radiosity_seed(seed, p.id));
+                p.radiance = est.radiosity(scene, &p.y, Self::render_seed(seed, p.id));
+            });
             self.lighting = Some(key);
+        } else {
+            let fresh: Vec<(usize, Vec3)> = added
+                .par_iter()
+                .filter_map(|&s| self.particles[s].map(|p| (s, est.radiosity(scene, &p.y, Self::render_seed(seed, p.id)))))
+                .collect();
+            for (s, l) in fresh {
+                if let Some(p) = self.particles[s].as_mut() {
+                    p.radiance = l;
+                }
+            }
         }
         tm.radiosity_ms += ms(t0);
 

@@ -1,0 +1,530 @@
+//! Table 1 of Hedman et al. (SMC instant radiosity, §5.2): how far each
+//! sampler's indirect light at eight tracked pixels lies from path-traced
+//! ground truth (|E|) and how much that error flickers from frame to frame
+//! (|E′|), over five animated sequences, with every method given the same
+//! budget, shadow maps, interleaved shading and filter.
+//!
+//! The work is split into units that can run anywhere and in any order:
+//! one per (sequence, method), which renders the sequence's frames with
+//! that sampler and records the tracked pixels, and one per (sequence,
+//! frame) of ground truth. Each unit writes one JSON file under the output
+//! folder; [`merge`] reads them all and writes the tables and plots. A run
+//! split with `--shard i/n` (unit k goes to shard k mod n) therefore merges
+//! to exactly the bits of an unsplit one.
+
+pub mod report;
+pub mod rows;
+
+use crate::metrics::{temporal_error, tone_mapped_luminance, tone_mapped_stderr, TemporalError};
+use crate::pipeline::{Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use rows::Row;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vpl_core::glam::Vec3;
+use vpl_core::image::write_atomic;
+use vpl_core::{CoreError, GeometryClamp, Mode};
+use vpl_pathtrace::{track_with, Footprint, PathTracer};
+use vpl_sampling::SamplerConfig;
+
+/// Errors of a Table 1 run.
+#[derive(Debug, thiserror::Error)]
+pub enum Table1Error {
+    /// A scene, file or image problem.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+    /// A setting is invalid.
+    #[error("{0}")]
+    Invalid(String),
+    /// The output folder holds units of a run with other settings.
+    #[error("{0} holds results of a run with other settings ({1}); use another --out or remove it")]
+    SpecMismatch(PathBuf, String),
+    /// Units are missing when merging.
+    #[error("{missing} of {total} units are missing in {dir} (first: {first}); run the shards that make them")]
+    Missing {
+        /// The folder.
+        dir: PathBuf,
+        /// Missing units.
+        missing: usize,
+        /// All units.
+        total: usize,
+        /// The first missing unit's file.
+        first: String,
+    },
+    /// A unit file could not be read.
+    #[error("{0}: {1}")]
+    Unit(PathBuf, String),
+    /// A plot failed.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
+}
+
+/// The frames of one row that a run renders.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RowRun {
+    /// Row id ([`rows::Row::id`]).
+    pub id: String,
+    /// First frame.
+    pub start: u32,
+    /// One past the last frame.
+    pub end: u32,
+}
+
+/// Everything that fixes the numbers of a run: two runs with equal specs
+/// give equal unit files.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Table1Spec {
+    /// `quick`, `full` or `custom`.
+    pub profile: String,
+    /// Rows and their frames.
+    pub rows: Vec<RowRun>,
+    /// Sampler registry names.
+    pub methods: Vec<String>,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Path-traced samples per tracked pixel and frame of ground truth.
+    pub truth_spp: u32,
+    /// Longest path in segments (5: three indirect bounces, as the paper).
+    pub max_depth: u32,
+    /// Shadow-map side in texels (the paper's 128).
+    pub shadow_map_res: u32,
+    /// Seed of every stream.
+    pub seed: u64,
+}
+
+/// The paper's ground-truth sample count per pixel (§5.2).
+pub const PAPER_TRUTH_SPP: u32 = 692_100;
+
+/// The methods of the table: the paper's four and RR.
+pub const METHODS: [&str; 5] = ["ir", "rr", "mir-resample", "tcas", "smc"];
+
+/// Frames of the quick profile's window per row.
+impl Table1Spec {
+    /// The quick profile: every row's `quick_frames`, 65 536 truth samples.
+    pub fn quick() -> Self {
+        Self::with_frames("quick", 65_536, |r| Ok(r.quick_frames.clone())).expect("the built-in rows load")
+    }
+
+    /// The paper's settings: whole sequences, 692 100 truth samples.
+    pub fn full() -> Result<Self, Table1Error> {
+        Self::with_frames("full", PAPER_TRUTH_SPP, |r| Ok(0..r.frame_count()?))
+    }
+
+    fn with_frames(profile: &str, truth_spp: u32, frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, CoreError>) -> Result<Self, Table1Error> {
+        let rows = rows::rows()
+            .iter()
+            .map(|r| {
+                let f = frames(r)?;
+                Ok(RowRun { id: r.id.to_string(), start: f.start, end: f.end })
+            })
+            .collect::<Result<_, Table1Error>>()?;
+        Ok(Table1Spec {
+            profile: profile.into(),
+            rows,
+            methods: METHODS.iter().map(|s| s.to_string()).collect(),
+            size: (320, 240),
+            truth_spp,
+            max_depth: 5,
+            shadow_map_res: 128,
+            seed: 0,
+        })
+    }
+
+    /// Checks names, frames and settings; says what is wrong in one line.
+    pub fn validate(&self) -> Result<(), Table1Error> {
+        if self.rows.is_empty() || self.methods.is_empty() {
+            return Err(Table1Error::Invalid("a run needs at least one sequence and one method".into()));
+        }
+        for r in &self.rows {
+            let row = rows::row(&r.id).ok_or_else(|| Table1Error::Invalid(format!("unknown sequence '{}' (sequences: {})", r.id, row_ids().join(", "))))?;
+            let n = row.frame_count()?;
+            if r.start >= r.end || r.end > n {
+                return Err(Table1Error::Invalid(format!("frames {}..{} do not fit {} ({n} frames)", r.start, r.end, r.id)));
+            }
+        }
+        for m in &self.methods {
+            if !vpl_sampling::SAMPLERS.iter().any(|e| e.name == m) {
+                return Err(Table1Error::Invalid(format!("unknown method '{m}' (methods: {})", vpl_sampling::SAMPLERS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "))));
+            }
+        }
+        if self.truth_spp == 0 || self.size.0 == 0 || self.size.1 == 0 {
+            return Err(Table1Error::Invalid("truth samples and image size must be positive".into()));
+        }
+        Ok(())
+    }
+
+    /// The units of the run: every (row, method) sequence, then every
+    /// (row, frame) of ground truth.
+    pub fn units(&self) -> Vec<Unit> {
+        let mut u = Vec::new();
+        for (r, _) in self.rows.iter().enumerate() {
+            for (m, _) in self.methods.iter().enumerate() {
+                u.push(Unit::Method { row: r, method: m });
+            }
+        }
+        for (r, run) in self.rows.iter().enumerate() {
+            for f in run.start..run.end {
+                u.push(Unit::Truth { row: r, frame: f });
+            }
+        }
+        u
+    }
+
+    /// The file of `unit`, relative to the output folder.
+    pub fn unit_file(&self, unit: Unit) -> String {
+        match unit {
+            Unit::Method { row, method } => format!("units/{}/{}.json", self.rows[row].id, self.methods[method]),
+            Unit::Truth { row, frame } => format!("units/{}/truth_{frame:05}.json", self.rows[row].id),
+        }
+    }
+
+    /// Frames a unit renders (the progress bar's measure of work: a truth
+    /// frame counts as one).
+    pub fn unit_weight(&self, unit: Unit) -> u64 {
+        match unit {
+            Unit::Method { row, .. } => (self.rows[row].end - self.rows[row].start) as u64,
+            Unit::Truth { .. } => 1,
+        }
+    }
+}
+
+/// Row ids of the table.
+pub fn row_ids() -> Vec<&'static str> {
+    rows::rows().iter().map(|r| r.id).collect()
+}
+
+/// One piece of work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// A sequence rendered with one method.
+    Method {
+        /// Index into [`Table1Spec::rows`].
+        row: usize,
+        /// Index into [`Table1Spec::methods`].
+        method: usize,
+    },
+    /// Ground truth of one frame of a sequence.
+    Truth {
+        /// Index into [`Table1Spec::rows`].
+        row: usize,
+        /// Frame.
+        frame: u32,
+    },
+}
+
+/// Shard `index` of `count`: the units k with k mod count = index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 0-based.
+    pub index: u32,
+    /// Number of shards.
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole run.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Whether unit number `k` belongs to this shard.
+    pub fn owns(&self, k: usize) -> bool {
+        k as u64 % self.count as u64 == self.index as u64
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Shard, String> {
+        let (a, b) = s.split_once('/').ok_or_else(|| format!("'{s}' is not a shard (expected I/N, e.g. 0/4)"))?;
+        let index: u32 = a.trim().parse().map_err(|_| format!("'{a}' is not a shard index"))?;
+        let count: u32 = b.trim().parse().map_err(|_| format!("'{b}' is not a shard count"))?;
+        if count == 0 || index >= count {
+            return Err(format!("shard {index}/{count}: the index must be below the count"));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// Ground truth of one frame: the tracked pixels' indirect radiance.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TruthUnit {
+    /// Row id.
+    pub row: String,
+    /// Frame.
+    pub frame: u32,
+    /// Mean radiance per tracked pixel.
+    pub mean: Vec<[f32; 3]>,
+    /// Its standard error per channel.
+    pub stderr: Vec<[f32; 3]>,
+    /// Samples per pixel.
+    pub samples: u64,
+}
+
+/// One method's run of a sequence.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MethodUnit {
+    /// Row id.
+    pub row: String,
+    /// Method.
+    pub method: String,
+    /// Frames rendered.
+    pub frames: Vec<u32>,
+    /// Indirect radiance per frame and tracked pixel.
+    pub tracked: Vec<Vec<[f32; 3]>>,
+    /// VPL slots moved per frame.
+    pub moved: Vec<usize>,
+    /// Milliseconds per frame: G-buffer, sampling, visibility, shading, total.
+    pub ms: Vec<[f64; 5]>,
+    /// Wall time of the unit in seconds.
+    pub seconds: f64,
+}
+
+/// Progress of a run, for a progress bar.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Progress {
+    /// Work done (frames; a truth frame counts one).
+    pub done: u64,
+    /// All work of the shard.
+    pub total: u64,
+    /// What is being done.
+    pub message: String,
+}
+
+/// What a shard did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    /// Units computed.
+    pub ran: usize,
+    /// Units found already done and kept.
+    pub kept: usize,
+    /// Units of the whole run.
+    pub total_units: usize,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, Table1Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))?;
+    serde_json::from_str(&text).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))
+}
+
+fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), Table1Error> {
+    if let Some(d) = path.parent() {
+        std::fs::create_dir_all(d).map_err(|e| CoreError::Write { path: d.into(), reason: e.to_string() })?;
+    }
+    let text = serde_json::to_string_pretty(v).map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
+/// Runs the units of `shard` into `dir` (skipping units whose files exist:
+/// an interrupted run resumes). Writes `spec.json` first; refuses a folder
+/// whose `spec.json` differs.
+pub fn run(spec: &Table1Spec, dir: &Path, shard: Shard, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, Table1Error> {
+    spec.validate()?;
+    let start = Instant::now();
+    let spec_path = dir.join("spec.json");
+    if spec_path.exists() {
+        let old: Table1Spec = read_json(&spec_path)?;
+        if &old != spec {
+            return Err(Table1Error::SpecMismatch(dir.into(), format!("its profile is '{}'", old.profile)));
+        }
+    } else {
+        write_json(&spec_path, spec)?;
+    }
+    let units = spec.units();
+    let mine: Vec<(usize, Unit)> = units.iter().copied().enumerate().filter(|(k, _)| shard.owns(*k)).collect();
+    let total: u64 = mine.iter().map(|(_, u)| spec.unit_weight(*u)).sum();
+    let mut summary = RunSummary { total_units: units.len(), ..RunSummary::default() };
+    let mut done = 0u64;
+    for (_, unit) in mine {
+        let path = dir.join(spec.unit_file(unit));
+        let w = spec.unit_weight(unit);
+        if path.exists() {
+            summary.kept += 1;
+            done += w;
+            continue;
+        }
+        match unit {
+            Unit::Method { row, method } => {
+                let r = rows::row(&spec.rows[row].id).expect("validated");
+                let name = &spec.methods[method];
+                let base = done;
+                let u = run_method(spec, &r, &spec.rows[row], name, &mut |f| {
+                    progress(&Progress { done: base + f, total, message: format!("{} {name}", r.id) });
+                })?;
+                write_json(&path, &u)?;
+            }
+            Unit::Truth { row, frame } => {
+                let r = rows::row(&spec.rows[row].id).expect("validated");
+                progress(&Progress { done, total, message: format!("{} ground truth", r.id) });
+                write_json(&path, &run_truth(spec, &r, frame)?)?;
+            }
+        }
+        summary.ran += 1;
+        done += w;
+        progress(&Progress { done, total, message: String::new() });
+    }
+    summary.seconds = start.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// The renderer every method gets: indirect light only, the paper's depth,
+/// shadow maps, 4×4 interleaved shading with the cross-bilateral filter,
+/// the geometry clamp G_max = I / A, and IR with new paths every frame (the
+/// baseline without temporal coherence).
+pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
+    PipelineSpec {
+        sampler: method.to_string(),
+        config: SamplerConfig { vpls, max_depth: spec.max_depth, fresh_paths: true, ..SamplerConfig::default() },
+        visibility: VisibilitySpec::ShadowMaps(spec.shadow_map_res),
+        shading: ShadingSpec::Interleaved { filter: true },
+        clamp: Some(clamp),
+        mode: Mode::Indirect,
+        direct_samples: 1,
+        seed: spec.seed,
+    }
+}
+
+fn run_method(spec: &Table1Spec, row: &Row, run: &RowRun, method: &str, on_frame: &mut dyn FnMut(u64)) -> Result<MethodUnit, Table1Error> {
+    let start = Instant::now();
+    let setup = row.setup()?;
+    let clamp = GeometryClamp::for_budget(row.vpls, setup.scene.surface_area());
+    let mut pipeline = Pipeline::new(pipeline_spec(spec, method, row.vpls, clamp)).map_err(Table1Error::Invalid)?;
+    let pixels = row.pixels(spec.size);
+    let fps = setup.sequence.as_ref().map_or(30.0, |s| s.fps);
+    let mut u = MethodUnit { row: row.id.into(), method: method.into(), frames: Vec::new(), tracked: Vec::new(), moved: Vec::new(), ms: Vec::new(), seconds: 0.0 };
+    for (k, f) in (run.start..run.end).enumerate() {
+        let (scene, camera) = setup.frame(f)?;
+        let camera = camera.with_resolution(spec.size)?;
+        let out = pipeline.render(&scene, &camera, f as u64, f as f32 / fps);
+        let t = out.timings;
+        u.frames.push(f);
+        u.tracked.push(pixels.iter().map(|&(x, y)| out.image.get(x, y).to_array()).collect());
+        u.moved.push(out.moved);
+        u.ms.push([t.gbuffer_ms, t.sampling_ms, t.visibility_ms, t.shading_ms, t.total_ms]);
+        on_frame(k as u64 + 1);
+    }
+    u.seconds = start.elapsed().as_secs_f64();
+    Ok(u)
+}
+
+fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Table1Error> {
+    let setup = row.setup()?;
+    let (scene, camera) = setup.frame(frame)?;
+    let camera = camera.with_resolution(spec.size)?;
+    let pt = PathTracer::new(spec.max_depth, Mode::Indirect);
+    // Rays through the pixel centres: the one point a G-buffer shades per
+    // pixel, so edges inside a pixel do not count as VPL error.
+    let t = track_with(&scene, &camera, &pt, &row.pixels(spec.size), spec.truth_spp, spec.seed ^ 0x7472_7574_68, frame as u64, Footprint::Centre);
+    Ok(TruthUnit {
+        row: row.id.into(),
+        frame,
+        mean: t.iter().map(|p| p.mean.to_array()).collect(),
+        stderr: t.iter().map(|p| p.stderr.to_array()).collect(),
+        samples: spec.truth_spp as u64,
+    })
+}
+
+/// One method's errors on one row.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MethodResult {
+    /// Method name.
+    pub method: String,
+    /// |E| and |E′|.
+    pub error: TemporalError,
+    /// Tone-mapped luminance per frame and tracked pixel.
+    pub luminance: Vec<Vec<f64>>,
+    /// Median VPL slots moved per frame (after the first).
+    pub median_moved: f64,
+}
+
+/// One row's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RowResult {
+    /// Row id.
+    pub id: String,
+    /// Built-in scene.
+    pub scene: String,
+    /// VPL budget.
+    pub vpls: usize,
+    /// Frames `start..end`.
+    pub frames: (u32, u32),
+    /// Tracked pixels (in the run's image) and their labels.
+    pub pixels: Vec<((u32, u32), String)>,
+    /// Ground truth: tone-mapped luminance per frame and pixel.
+    pub truth: Vec<Vec<f64>>,
+    /// Mean standard error of the tone-mapped ground truth.
+    pub truth_stderr: f64,
+    /// Per method.
+    pub methods: Vec<MethodResult>,
+}
+
+/// The merged run: what `table1.json` holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Table1Results {
+    /// The settings.
+    pub spec: Table1Spec,
+    /// Per row.
+    pub rows: Vec<RowResult>,
+}
+
+/// Reads every unit of the run in `dir` and computes the table; errs
+/// naming a missing unit.
+pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Error> {
+    let spec: Table1Spec = read_json(&dir.join("spec.json"))?;
+    spec.validate()?;
+    let units = spec.units();
+    let missing: Vec<String> = units.iter().map(|u| spec.unit_file(*u)).filter(|f| !dir.join(f).exists()).collect();
+    if let Some(first) = missing.first() {
+        return Err(Table1Error::Missing { dir: dir.into(), missing: missing.len(), total: units.len(), first: first.clone() });
+    }
+    let mut rows_out = Vec::new();
+    let mut runs = Vec::new();
+    for (ri, run) in spec.rows.iter().enumerate() {
+        let row = rows::row(&run.id).expect("validated");
+        let mut truth = Vec::new();
+        let mut se_sum = 0.0;
+        let mut se_n = 0usize;
+        for f in run.start..run.end {
+            let t: TruthUnit = read_json(&dir.join(spec.unit_file(Unit::Truth { row: ri, frame: f })))?;
+            truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
+            for (m, s) in t.mean.iter().zip(&t.stderr) {
+                se_sum += tone_mapped_stderr(Vec3::from(*m), Vec3::from(*s));
+                se_n += 1;
+            }
+        }
+        let mut methods = Vec::new();
+        for (mi, name) in spec.methods.iter().enumerate() {
+            let u: MethodUnit = read_json(&dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })))?;
+            if u.frames.len() != truth.len() {
+                return Err(Table1Error::Unit(dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })), "frame count differs from the spec".into()));
+            }
+            let lum: Vec<Vec<f64>> = u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
+            let error = temporal_error(&lum, &truth)?;
+            let mut moved: Vec<f64> = u.moved.iter().skip(1).map(|&m| m as f64).collect();
+            moved.sort_by(f64::total_cmp);
+            let median_moved = moved.get(moved.len() / 2).copied().unwrap_or(0.0);
+            methods.push(MethodResult { method: name.clone(), error, luminance: lum, median_moved });
+            runs.push(u);
+        }
+        rows_out.push(RowResult {
+            id: run.id.clone(),
+            scene: row.scene.into(),
+            vpls: row.vpls,
+            frames: (run.start, run.end),
+            pixels: row.pixels(spec.size).into_iter().zip(row.tracked.iter().map(|t| t.label.to_string())).collect(),
+            truth,
+            truth_stderr: if se_n > 0 { se_sum / se_n as f64 } else { 0.0 },
+            methods,
+        });
+    }
+    Ok((Table1Results { spec, rows: rows_out }, runs))
+}
+
+/// Merges the run in `dir` and writes `table1.md`, `table1.csv`,
+/// `table1.json`, `fig7_<row>.png` and `fig7.csv` there.
+pub fn merge(dir: &Path) -> Result<Table1Results, Table1Error> {
+    let (results, runs) = collect(dir)?;
+    report::write(dir, &results, &runs)?;
+    Ok(results)
+}

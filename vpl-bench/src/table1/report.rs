@@ -1,0 +1,230 @@
+//! Table 1's files: `table1.md`, `table1.csv`, `table1.json`, the Fig. 7
+//! plots and their data, and `runs.csv` (per-unit timings, which vary from
+//! run to run and so stay out of the other files).
+
+use super::rows::{self, PAPER_METHODS};
+use super::{MethodUnit, RowResult, Table1Error, Table1Results};
+use crate::plot::{line_chart, method_color, Chart, Series};
+use std::fmt::Write as _;
+use std::path::Path;
+use vpl_core::image::write_atomic;
+
+/// The sequences Fig. 7 plots, as the paper: Citadel with the moving sun, Soda Hall, Maze.
+pub const FIG7_ROWS: [&str; 3] = ["courtyard-sun", "office", "maze"];
+
+/// The name a method goes by in tables.
+pub fn display_name(method: &str) -> String {
+    match method {
+        "ir" => "IR".into(),
+        "rr" => "RR".into(),
+        "mir-resample" => "MIR".into(),
+        "mir" => "MIR (MH)".into(),
+        "tcas" => "TCAS".into(),
+        "smc" => "SMC".into(),
+        m => m.to_string(),
+    }
+}
+
+fn paper_index(method: &str) -> Option<usize> {
+    PAPER_METHODS.iter().position(|m| *m == method)
+}
+
+/// Our values of one metric for a row, bold where smallest.
+fn metric_cells(row: &RowResult, get: impl Fn(&super::MethodResult) -> f64) -> String {
+    let vals: Vec<f64> = row.methods.iter().map(&get).collect();
+    let best = vals.iter().copied().fold(f64::INFINITY, f64::min);
+    vals.iter().map(|&v| if v == best { format!(" **{v:.4}** |") } else { format!(" {v:.4} |") }).collect()
+}
+
+fn paper_cells(row: &RowResult, methods: &[String], vals: impl Fn(&rows::PaperRow) -> [f64; 4]) -> String {
+    let p = rows::row(&row.id).expect("known row").paper;
+    let v = vals(&p);
+    let shown: Vec<Option<f64>> = methods.iter().map(|m| paper_index(m).map(|i| v[i])).collect();
+    let best = shown.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+    shown
+        .iter()
+        .map(|s| match s {
+            Some(x) if *x == best => format!(" **{x:.4}** |"),
+            Some(x) => format!(" {x:.4} |"),
+            None => " – |".into(),
+        })
+        .collect()
+}
+
+/// `table1.md`.
+pub fn markdown(r: &Table1Results) -> String {
+    let s = &r.spec;
+    let names: Vec<String> = s.methods.iter().map(|m| display_name(m)).collect();
+    let mut md = String::from("# Table 1: error and temporal instability of the VPL samplers\n\n");
+    let _ = writeln!(
+        md,
+        "Hedman et al. 2017, §5.2, redone on the built-in scenes. Eight tracked pixels per sequence; indirect light only, \
+         luminance after Reinhard's operator L/(1+L); ground truth from the path tracer ({} samples per pixel and frame, \
+         rays through the pixel centre); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
+         shading, the cross-bilateral filter and the clamp G_max = I / A; no temporal reprojection; max depth {} (three \
+         indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
+         Profile `{}`, {}×{} pixels, seed {}. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL). \
+         Smallest value in bold; the paper's values (its Table 1) on the right.\n",
+        s.truth_spp, s.shadow_map_res, s.max_depth, s.profile, s.size.0, s.size.1, s.seed
+    );
+    for (title, get, paper) in [
+        ("Average |E|", (|m: &super::MethodResult| m.error.e) as fn(&super::MethodResult) -> f64, (|p: &rows::PaperRow| p.e) as fn(&rows::PaperRow) -> [f64; 4]),
+        ("Average |E′|", |m| m.error.e_prime, |p| p.e_prime),
+    ] {
+        let _ = writeln!(md, "## {title}\n");
+        let mut head = String::from("| sequence | stands in for | lights | VPLs | frames |");
+        let mut rule = String::from("| --- | --- | --- | --- | --- |");
+        for n in &names {
+            let _ = write!(head, " {n} |");
+            rule.push_str(" ---: |");
+        }
+        head.push_str(" truth s.e. |");
+        rule.push_str(" ---: |");
+        for n in &names {
+            let _ = write!(head, " paper {n} |");
+            rule.push_str(" ---: |");
+        }
+        let _ = writeln!(md, "{head}\n{rule}");
+        for row in &r.rows {
+            let p = rows::row(&row.id).expect("known row").paper;
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | {} | {} | {}..{} |{} {:.4} |{}",
+                row.id,
+                p.scene,
+                p.lights,
+                row.vpls,
+                row.frames.0,
+                row.frames.1,
+                metric_cells(row, get),
+                row.truth_stderr,
+                paper_cells(row, &s.methods, paper)
+            );
+        }
+        md.push('\n');
+    }
+    md.push_str("## Mean signed error (bias)\n\nThe mean of estimate − truth over frames and pixels: noise averages out here, a bias does not.\n\n| sequence |");
+    for n in &names {
+        let _ = write!(md, " {n} |");
+    }
+    md.push_str("\n| --- |");
+    md.push_str(&" ---: |".repeat(names.len()));
+    md.push('\n');
+    for row in &r.rows {
+        let _ = write!(md, "| `{}` |", row.id);
+        for m in &row.methods {
+            let _ = write!(md, " {:+.4} |", m.error.bias);
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+    md.push_str("## The target: SMC lowest |E′| in every sequence, |E| no worse than MIR's\n\n| sequence | SMC \\|E′\\| | lowest other \\|E′\\| | lowest? | SMC \\|E\\| | MIR \\|E\\| | ≤ MIR? |\n| --- | ---: | ---: | --- | ---: | ---: | --- |\n");
+    for row in &r.rows {
+        let find = |m: &str| row.methods.iter().find(|x| x.method == m);
+        let Some(smc) = find("smc") else { continue };
+        let other = row.methods.iter().filter(|m| m.method != "smc").min_by(|a, b| a.error.e_prime.total_cmp(&b.error.e_prime));
+        let (oname, ov) = other.map_or(("–".to_string(), f64::NAN), |o| (display_name(&o.method), o.error.e_prime));
+        let lowest = other.is_none_or(|o| smc.error.e_prime < o.error.e_prime);
+        let mir = find("mir-resample").map(|m| m.error.e);
+        let _ = writeln!(
+            md,
+            "| `{}` | {:.4} | {ov:.4} ({oname}) | {} | {:.4} | {} | {} |",
+            row.id,
+            smc.error.e_prime,
+            if lowest { "yes" } else { "**no**" },
+            smc.error.e,
+            mir.map_or("–".into(), |v| format!("{v:.4}")),
+            match mir {
+                Some(v) if smc.error.e <= v => "yes",
+                Some(_) => "**no**",
+                None => "–",
+            }
+        );
+    }
+    md.push_str("\n## Tracked pixels\n\n");
+    for row in &r.rows {
+        let _ = writeln!(md, "- `{}`: {}", row.id, row.pixels.iter().enumerate().map(|(i, ((x, y), l))| format!("{i} ({x}, {y}) {l}")).collect::<Vec<_>>().join("; "));
+    }
+    md
+}
+
+/// `table1.csv`: one line per sequence and method.
+pub fn csv(r: &Table1Results) -> String {
+    let mut s = String::from("sequence,scene,vpls,frame_start,frame_end,method,e,e_prime,bias,count,count_prime,truth_stderr,median_moved,paper_e,paper_e_prime\n");
+    for row in &r.rows {
+        let p = rows::row(&row.id).expect("known row").paper;
+        for m in &row.methods {
+            let (pe, pp) = paper_index(&m.method).map_or((String::new(), String::new()), |i| (p.e[i].to_string(), p.e_prime[i].to_string()));
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.6},{},{pe},{pp}",
+                row.id, row.scene, row.vpls, row.frames.0, row.frames.1, m.method, m.error.e, m.error.e_prime, m.error.bias, m.error.count, m.error.count_prime, row.truth_stderr, m.median_moved
+            );
+        }
+    }
+    s
+}
+
+/// `runs.csv`: median milliseconds per stage and wall time of each unit.
+pub fn runs_csv(runs: &[MethodUnit]) -> String {
+    let mut s = String::from("sequence,method,frames,seconds,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,total_ms\n");
+    for u in runs {
+        let med = |i: usize| {
+            let mut v: Vec<f64> = u.ms.iter().skip(1).map(|m| m[i]).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(0.0)
+        };
+        let _ = writeln!(s, "{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}", u.row, u.method, u.frames.len(), u.seconds, med(0), med(1), med(2), med(3), med(4));
+    }
+    s
+}
+
+/// Fig. 7: the tracked pixel's luminance over time, per method against
+/// ground truth, for the rows of [`FIG7_ROWS`] in the run.
+fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
+    let mut data = String::from("sequence,pixel,x,y,frame,time,method,luminance\n");
+    for row in r.rows.iter().filter(|row| FIG7_ROWS.contains(&row.id.as_str())) {
+        let def = rows::row(&row.id).expect("known row");
+        let k = def.fig7_pixel;
+        let t0 = row.frames.0;
+        let time = |i: usize| (t0 as usize + i) as f64 / 30.0;
+        let mut series = vec![Series {
+            label: "ground truth".into(),
+            points: row.truth.iter().enumerate().map(|(i, f)| (time(i), f[k])).collect(),
+            color: method_color("truth"),
+            bold: true,
+            markers: false,
+        }];
+        for m in &row.methods {
+            series.push(Series {
+                label: display_name(&m.method),
+                points: m.luminance.iter().enumerate().map(|(i, f)| (time(i), f[k])).collect(),
+                color: method_color(&m.method),
+                bold: false,
+                markers: row.truth.len() < 40,
+            });
+        }
+        let ((x, y), label) = &row.pixels[k];
+        for s in &series {
+            for (i, (t, l)) in s.points.iter().enumerate() {
+                let _ = writeln!(data, "{},{k},{x},{y},{},{t:.4},{},{l:.6}", row.id, t0 as usize + i, s.label);
+            }
+        }
+        let title = format!("{} ({} VPLs), pixel {k} ({x}, {y}): {label}", row.id, row.vpls);
+        let chart = Chart { title: &title, x_label: "seconds", y_label: "luminance (Reinhard)", log: (false, false), size: (960, 420) };
+        line_chart(&dir.join(format!("fig7_{}.png", row.id)), &chart, &series)?;
+    }
+    Ok(data)
+}
+
+/// Writes every Table 1 file into `dir`.
+pub fn write(dir: &Path, r: &Table1Results, runs: &[MethodUnit]) -> Result<(), Table1Error> {
+    write_atomic(&dir.join("table1.md"), markdown(r).as_bytes())?;
+    write_atomic(&dir.join("table1.csv"), csv(r).as_bytes())?;
+    let json = serde_json::to_string_pretty(r).map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    write_atomic(&dir.join("table1.json"), json.as_bytes())?;
+    write_atomic(&dir.join("runs.csv"), runs_csv(runs).as_bytes())?;
+    let data = fig7(dir, r)?;
+    write_atomic(&dir.join("fig7.csv"), data.as_bytes())?;
+    Ok(())
+}

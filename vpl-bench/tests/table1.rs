@@ -1,0 +1,98 @@
+//! Table 1 end to end on a tiny run: units, merge, files; a run split into
+//! two shards merges to the same bits as the unsplit run.
+
+use std::path::{Path, PathBuf};
+use vpl_bench::table1::{self, RowRun, Shard, Table1Error, Table1Spec};
+
+fn tiny() -> Table1Spec {
+    Table1Spec {
+        profile: "test".into(),
+        rows: vec![RowRun { id: "maze".into(), start: 300, end: 303 }],
+        methods: vec!["ir".into(), "smc".into()],
+        size: (64, 48),
+        truth_spp: 512,
+        max_depth: 5,
+        shadow_map_res: 32,
+        seed: 3,
+    }
+}
+
+fn fresh(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("vpl-table1-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn read(dir: &Path, f: &str) -> String {
+    std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"))
+}
+
+#[test]
+fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
+    let spec = tiny();
+    let whole = fresh("whole");
+    let s = table1::run(&spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
+    assert_eq!((s.ran, s.kept, s.total_units), (5, 0, 5));
+    let r = table1::merge(&whole).unwrap();
+    let row = &r.rows[0];
+    assert_eq!(row.truth.len(), 3);
+    assert_eq!(row.methods.len(), 2);
+    for m in &row.methods {
+        assert!(m.error.e.is_finite() && m.error.e > 0.0 && m.error.e_prime.is_finite(), "{m:?}");
+        assert_eq!((m.error.count, m.error.count_prime), (24, 16));
+    }
+    // The truth is not black: the tracked pixels see lit surfaces.
+    assert!(row.truth.iter().flatten().filter(|l| **l > 0.0).count() >= 12, "{:?}", row.truth);
+    let md = read(&whole, "table1.md");
+    assert!(md.contains("| `maze` |") && md.contains("paper SMC") && md.contains("0.0221"), "{md}");
+    assert!(read(&whole, "table1.csv").lines().count() == 3);
+    assert!(whole.join("fig7_maze.png").exists());
+
+    // A second call finds every unit done and keeps it.
+    let again = table1::run(&spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
+    assert_eq!((again.ran, again.kept), (0, 5));
+
+    let split = fresh("split");
+    let a = table1::run(&spec, &split, Shard { index: 0, count: 2 }, &mut |_| {}).unwrap();
+    // Half the units are missing before the second shard runs.
+    assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 2, total: 5, .. })));
+    let b = table1::run(&spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
+    assert_eq!((a.ran, b.ran), (3, 2));
+    table1::merge(&split).unwrap();
+    for f in ["table1.json", "table1.md", "table1.csv", "fig7.csv"] {
+        assert!(read(&whole, f) == read(&split, f), "{f} differs between the whole and the sharded run");
+    }
+
+    // Another spec into the same folder is refused.
+    let other = Table1Spec { seed: 4, ..spec };
+    assert!(matches!(table1::run(&other, &split, Shard::ALL, &mut |_| {}), Err(Table1Error::SpecMismatch(..))));
+    std::fs::remove_dir_all(&whole).unwrap();
+    std::fs::remove_dir_all(&split).unwrap();
+}
+
+#[test]
+fn specs_and_shards_are_checked() {
+    let mut s = tiny();
+    s.rows[0].end = 100_000;
+    assert!(s.validate().unwrap_err().to_string().contains("do not fit maze"));
+    let mut s = tiny();
+    s.methods = vec!["nope".into()];
+    assert!(s.validate().unwrap_err().to_string().contains("unknown method 'nope'"));
+    let mut s = tiny();
+    s.rows[0].id = "sponza".into();
+    assert!(s.validate().unwrap_err().to_string().contains("unknown sequence"));
+    assert!("1/2".parse::<Shard>().is_ok());
+    for bad in ["2/2", "1", "a/b", "0/0"] {
+        assert!(bad.parse::<Shard>().is_err(), "{bad}");
+    }
+    // Units go round-robin: every unit to exactly one of three shards.
+    let units = Table1Spec::quick().units();
+    for k in 0..units.len() {
+        assert_eq!((0..3).filter(|&i| Shard { index: i, count: 3 }.owns(k)).count(), 1);
+    }
+    // The quick profile's windows hold the paper's five rows.
+    let q = Table1Spec::quick();
+    q.validate().unwrap();
+    assert_eq!(q.rows.iter().map(|r| r.id.as_str()).collect::<Vec<_>>(), ["office", "courtyard", "maze", "atrium", "courtyard-sun"]);
+}

@@ -281,6 +281,11 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     if job("table1") {
         let t = Instant::now();
         let dir = results.join("table1");
+        // An unsharded run starts afresh (units of an older build or other settings would be
+        // kept or refused); the shards of a sharded run share the folder and resume in it.
+        if shard.is_none() && dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
+        }
         eprintln!("xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})", profile.name, shard.as_deref().map_or(String::new(), |s| format!(", shard {s}")));
         let mut c = Command::new(&vpl);
         c.current_dir(root()).args(["table1", "--profile", profile.name]).args(&table1_args).arg("--out").arg(&dir);

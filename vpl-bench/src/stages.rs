@@ -28,9 +28,10 @@ pub struct StageBench {
     pub indirect_frame: f64,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// The median of `v` (the upper one of an even count; 0 when empty).
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 fn time<T>(repeat: u32, mut f: impl FnMut() -> T) -> f64 {

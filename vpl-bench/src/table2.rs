@@ -1,6 +1,7 @@
 //! Table 2 of Hedman et al.: milliseconds per stage of an SMC frame, per
 //! scene, in the paper's columns (`vpl table2`).
 
+use crate::stages::median;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -74,11 +75,6 @@ impl Table2Row {
             self.total,
         ]
     }
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// Times `frames` SMC frames of `scene`'s sequence from frame `start` at

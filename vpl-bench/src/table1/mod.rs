@@ -415,7 +415,7 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
     let pt = PathTracer::new(spec.max_depth, Mode::Indirect);
     // Rays through the pixel centres: the one point a G-buffer shades per
     // pixel, so edges inside a pixel do not count as VPL error.
-    let t = track_with(&scene, &camera, &pt, &row.pixels(spec.size), spec.truth_spp, spec.seed ^ 0x7472_7574_68, frame as u64, Footprint::Centre);
+    let t = track_with(&scene, &camera, &pt, &row.pixels(spec.size), spec.truth_spp, spec.seed ^ 0x0074_7275_7468, frame as u64, Footprint::Centre);
     Ok(TruthUnit {
         row: row.id.into(),
         frame,
@@ -501,9 +501,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             }
             let lum: Vec<Vec<f64>> = u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
             let error = temporal_error(&lum, &truth)?;
-            let mut moved: Vec<f64> = u.moved.iter().skip(1).map(|&m| m as f64).collect();
-            moved.sort_by(f64::total_cmp);
-            let median_moved = moved.get(moved.len() / 2).copied().unwrap_or(0.0);
+            let median_moved = crate::stages::median(u.moved.iter().skip(1).map(|&m| m as f64).collect());
             methods.push(MethodResult { method: name.clone(), error, luminance: lum, median_moved });
             runs.push(u);
         }

@@ -5,6 +5,7 @@
 use super::rows::{self, PAPER_METHODS};
 use super::{MethodUnit, RowResult, Table1Error, Table1Results};
 use crate::plot::{line_chart, method_color, Chart, Series};
+use crate::stages::median;
 use std::fmt::Write as _;
 use std::path::Path;
 use vpl_core::image::write_atomic;
@@ -169,11 +170,7 @@ pub fn csv(r: &Table1Results) -> String {
 pub fn runs_csv(runs: &[MethodUnit]) -> String {
     let mut s = String::from("sequence,method,frames,seconds,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,total_ms\n");
     for u in runs {
-        let med = |i: usize| {
-            let mut v: Vec<f64> = u.ms.iter().skip(1).map(|m| m[i]).collect();
-            v.sort_by(f64::total_cmp);
-            v.get(v.len() / 2).copied().unwrap_or(0.0)
-        };
+        let med = |i: usize| median(u.ms.iter().skip(1).map(|m| m[i]).collect());
         let _ = writeln!(s, "{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}", u.row, u.method, u.frames.len(), u.seconds, med(0), med(1), med(2), med(3), med(4));
     }
     s

@@ -4,7 +4,7 @@
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
-use vpl_core::image::write_atomic;
+use vpl_core::image::write_png_rgb8;
 
 /// DejaVu Sans Mono (Bitstream Vera licence: `assets/DejaVuSansMono-LICENSE.txt`).
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
@@ -150,15 +150,7 @@ pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), P
         }
         root.present().map_err(|e| draw(&e))?;
     }
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().map_err(|e| draw(&e))?;
-        wr.write_image_data(&buf).map_err(|e| draw(&e))?;
-    }
-    write_atomic(path, &out)?;
+    write_png_rgb8(path, w, h, &buf)?;
     Ok(())
 }
 

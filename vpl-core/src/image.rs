@@ -98,16 +98,22 @@ impl Image {
             let c = linear_to_srgb(reinhard(*p * exposure));
             rgb.extend([c.x, c.y, c.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8));
         }
-        let mut out = Vec::new();
-        {
-            let mut enc = png::Encoder::new(&mut out, self.width, self.height);
-            enc.set_color(png::ColorType::Rgb);
-            enc.set_depth(png::BitDepth::Eight);
-            let mut w = enc.write_header().map_err(|e| CoreError::Write { path: path.into(), reason: e.to_string() })?;
-            w.write_image_data(&rgb).map_err(|e| CoreError::Write { path: path.into(), reason: e.to_string() })?;
-        }
-        write_atomic(path, &out)
+        write_png_rgb8(path, self.width, self.height, &rgb)
     }
+}
+
+/// Writes 8-bit RGB pixels (row-major, 3 bytes a pixel) as a PNG, atomically.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    let err = |e: png::EncodingError| CoreError::Write { path: path.into(), reason: e.to_string() };
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, width, height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().map_err(err)?;
+        w.write_image_data(rgb).map_err(err)?;
+    }
+    write_atomic(path, &out)
 }
 
 /// Luminance (Rec. 709 / sRGB primaries).

@@ -17,6 +17,7 @@ pub mod rows;
 
 use crate::metrics::{temporal_error, tone_mapped_luminance, tone_mapped_stderr, TemporalError};
 use crate::pipeline::{Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use crate::sequence::run_sequence;
 use rows::Row;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -390,19 +391,19 @@ fn run_method(spec: &Table1Spec, row: &Row, run: &RowRun, method: &str, on_frame
     let setup = row.setup()?;
     let clamp = GeometryClamp::for_budget(row.vpls, setup.scene.surface_area());
     let mut pipeline = Pipeline::new(pipeline_spec(spec, method, row.vpls, clamp)).map_err(Table1Error::Invalid)?;
-    let pixels = row.pixels(spec.size);
-    let fps = setup.sequence.as_ref().map_or(30.0, |s| s.fps);
+    let mut k = 0u64;
+    let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut pipeline, &row.pixels(spec.size), None, &mut |_, _| {
+        k += 1;
+        on_frame(k);
+    })
+    .map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut u = MethodUnit { row: row.id.into(), method: method.into(), frames: Vec::new(), tracked: Vec::new(), moved: Vec::new(), ms: Vec::new(), seconds: 0.0 };
-    for (k, f) in (run.start..run.end).enumerate() {
-        let (scene, camera) = setup.frame(f)?;
-        let camera = camera.with_resolution(spec.size)?;
-        let out = pipeline.render(&scene, &camera, f as u64, f as f32 / fps);
-        let t = out.timings;
-        u.frames.push(f);
-        u.tracked.push(pixels.iter().map(|&(x, y)| out.image.get(x, y).to_array()).collect());
-        u.moved.push(out.moved);
+    for f in frames {
+        let t = f.timings;
+        u.frames.push(f.index);
+        u.tracked.push(f.tracked.iter().map(|c| c.to_array()).collect());
+        u.moved.push(f.moved);
         u.ms.push([t.gbuffer_ms, t.sampling_ms, t.visibility_ms, t.shading_ms, t.total_ms]);
-        on_frame(k as u64 + 1);
     }
     u.seconds = start.elapsed().as_secs_f64();
     Ok(u)

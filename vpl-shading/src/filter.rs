@@ -42,13 +42,10 @@ impl Default for CrossBilateral {
 }
 
 impl CrossBilateral {
-    /// Filters `e` (one value per G-buffer pixel).
-    pub fn apply(&self, gbuf: &GBuffer, e: &Image) -> Image {
-        let (w, h) = (gbuf.width as i32, gbuf.height as i32);
-        let r = 2 * self.periods as i32;
-        // The guide, compact: position, normal, 1/2σ² (0 where nothing reflects).
-        let guide: Vec<(Vec3, Vec3, f32)> = gbuf
-            .samples
+    /// The guide, compact, per pixel: position, normal and 1/2σ_p² (0 where
+    /// nothing reflects). Shared with the GPU twin.
+    pub fn guide(&self, gbuf: &GBuffer) -> Vec<(Vec3, Vec3, f32)> {
+        gbuf.samples
             .iter()
             .map(|g| {
                 if !g.reflects() {
@@ -58,7 +55,14 @@ impl CrossBilateral {
                 let footprint = g.depth * gbuf.pixel_angle / g.n.dot(view).abs().max(0.1);
                 (g.p, g.n, 1.0 / (2.0 * (self.sigma * footprint).powi(2)).max(f32::MIN_POSITIVE))
             })
-            .collect();
+            .collect()
+    }
+
+    /// Filters `e` (one value per G-buffer pixel).
+    pub fn apply(&self, gbuf: &GBuffer, e: &Image) -> Image {
+        let (w, h) = (gbuf.width as i32, gbuf.height as i32);
+        let r = 2 * self.periods as i32;
+        let guide = self.guide(gbuf);
         let mut out = Image::new(gbuf.width, gbuf.height);
         out.data.par_chunks_mut(w.max(1) as usize).enumerate().for_each(|(y, row)| {
             let y = y as i32;

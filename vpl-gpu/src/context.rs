@@ -1,0 +1,50 @@
+//! The wgpu device every kernel runs on.
+
+/// Errors of the GPU path.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter of any backend was found.
+    #[error("no GPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers for lavapipe): {0}")]
+    NoAdapter(String),
+    /// The adapter refused a device.
+    #[error("cannot open the GPU device: {0}")]
+    Device(String),
+    /// A buffer could not be read back.
+    #[error("GPU read-back failed: {0}")]
+    ReadBack(String),
+    /// The input does not fit the kernel.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// An adapter, its device and queue.
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter is.
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuContext {
+    /// The default adapter of any backend (Vulkan first; GL through EGL as
+    /// the fallback), with the adapter's own limits.
+    pub fn new() -> Result<GpuContext, GpuError> {
+        let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends: wgpu::Backends::all(), ..Default::default() });
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())).map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("vpl-gpu"),
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(GpuContext { device, queue, info })
+    }
+
+    /// One line naming the adapter and backend.
+    pub fn describe(&self) -> String {
+        format!("{} ({:?}, {:?})", self.info.name, self.info.backend, self.info.device_type)
+    }
+}

@@ -1,0 +1,69 @@
+// The cross-bilateral filter of vpl_shading::CrossBilateral, one invocation a pixel.
+// w(p, q) = t(dx) t(dy) max(0, n_p . n_q)^alpha exp(-|x_p - x_q|^2 / 2 sigma_p^2)
+
+struct Params {
+    width: u32,
+    height: u32,
+    radius: i32,
+    normal_power: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+// xyz: position, w: 1 / 2 sigma_p^2 (0 where nothing reflects)
+@group(0) @binding(1) var<storage, read> guide_p: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> guide_n: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> output: array<vec4<f32>>;
+
+// x^k by squaring, as the CPU twin.
+fn pow_u(x0: f32, k0: u32) -> f32 {
+    var x = x0;
+    var k = k0;
+    var r = 1.0;
+    loop {
+        if (k == 0u) { break; }
+        if ((k & 1u) == 1u) { r = r * x; }
+        x = x * x;
+        k = k >> 1u;
+    }
+    return r;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= params.width || id.y >= params.height) { return; }
+    let w = i32(params.width);
+    let h = i32(params.height);
+    let x = i32(id.x);
+    let y = i32(id.y);
+    let i0 = u32(y * w + x);
+    let p = guide_p[i0];
+    if (p.w == 0.0) {
+        output[i0] = vec4<f32>(0.0);
+        return;
+    }
+    let np = guide_n[i0].xyz;
+    let r = params.radius;
+    var sum = vec3<f32>(0.0);
+    var wsum = 0.0;
+    for (var qy = max(y - r, 0); qy <= min(y + r, h - 1); qy = qy + 1) {
+        let ty = select(1.0, 0.5, abs(qy - y) == r);
+        for (var qx = max(x - r, 0); qx <= min(x + r, w - 1); qx = qx + 1) {
+            let i = u32(qy * w + qx);
+            let q = guide_p[i];
+            if (q.w == 0.0) { continue; }
+            let tx = select(1.0, 0.5, abs(qx - x) == r);
+            let wn = pow_u(max(dot(np, guide_n[i].xyz), 0.0), params.normal_power);
+            let d = p.xyz - q.xyz;
+            let wd = exp(-dot(d, d) * p.w);
+            let wt = tx * ty * wn * wd;
+            sum = sum + input[i].xyz * wt;
+            wsum = wsum + wt;
+        }
+    }
+    if (wsum > 0.0) {
+        output[i0] = vec4<f32>(sum / wsum, 0.0);
+    } else {
+        output[i0] = input[i0];
+    }
+}

@@ -19,6 +19,15 @@ struct PreparedTriangle {
     row2: Vec4,
 }
 
+/// The three rows of the affine map [`Bvh`] tests a triangle with: a point p
+/// lies at barycentrics (u, v) = (row0·(p, 1), row1·(p, 1)) and height
+/// row2·(p, 1) above the triangle's plane (in units of its normal e1 × e2).
+/// The GPU twin of the BVH uploads these rows.
+pub fn prepared_rows(t: &TriangleData) -> [Vec4; 3] {
+    let p = PreparedTriangle::new(t);
+    [p.row0, p.row1, p.row2]
+}
+
 impl PreparedTriangle {
     fn new(t: &TriangleData) -> Self {
         let (p0, e1, e2) = (t.p0, t.e1, t.e2);

@@ -66,7 +66,7 @@ pub use mesh::{Mesh, TriangleDesc};
 pub use mode::Mode;
 pub use ray::{LocalFrame, Ray};
 pub use rng::{stream, Purpose, RngStream};
-pub use scene::Scene;
+pub use scene::{Geometry, Scene, TriangleData};
 pub use scene_file::SceneFile;
 pub use sequence::Sequence;
 pub use setup::SceneSetup;

@@ -21,6 +21,11 @@
 
 mod context;
 mod filter;
+mod kernel;
+mod raycast;
+mod scene;
 
 pub use context::{GpuContext, GpuError};
 pub use filter::GpuCrossBilateral;
+pub use raycast::GpuRayCaster;
+pub use scene::GpuScene;

@@ -1,21 +1,13 @@
 //! The GPU filter against its CPU twin. Without an adapter the test says it
 //! skipped, unless VPL_REQUIRE_GPU=1 (CI), where a missing adapter fails.
 
+mod common;
+
+use common::context;
 use vpl_core::glam::Vec3;
 use vpl_core::{Image, SceneSetup};
-use vpl_gpu::{GpuContext, GpuCrossBilateral};
+use vpl_gpu::GpuCrossBilateral;
 use vpl_shading::CrossBilateral;
-
-fn context() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(c) => Some(c),
-        Err(e) if std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("VPL_REQUIRE_GPU=1 but {e}"),
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 /// On `cornell` (64×48) with an interleaving-like pattern: every pixel
 /// within 1e-4 relative (plus 1e-6 absolute) of the CPU filter. The two
@@ -23,7 +15,6 @@ fn context() -> Option<GpuContext> {
 #[test]
 fn gpu_filter_matches_the_cpu_filter() {
     let Some(ctx) = context() else { return };
-    eprintln!("adapter: {}", ctx.describe());
     let setup = SceneSetup::load("cornell").unwrap();
     let camera = setup.camera.with_resolution((64, 48)).unwrap();
     let gbuf = vpl_shading::render_gbuffer(&setup.scene, &camera);

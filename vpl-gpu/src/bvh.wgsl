@@ -1,0 +1,126 @@
+// The scene in storage buffers (vpl_gpu::GpuScene) and BVH ray casting:
+// closest hit and occlusion. Prepended to every kernel that traces rays.
+//
+// bvh_nodes: two vec4 per node of a binary BVH (obvhs Bvh2, root 0):
+//   [min.xyz, first_index], [max.xyz, prim_count]; an inner node has
+//   prim_count 0 and children first_index, first_index + 1; a leaf holds
+//   BVH primitives first_index .. first_index + prim_count.
+// bvh_tris: three vec4 per BVH primitive, the rows of the affine map of
+//   vpl_core::bvh::prepared_rows (Baldwin & Weber 2016).
+// bvh_order: scene triangle of each BVH primitive.
+// tri_info: four vec4 per scene triangle: [p0, material], [e1, normals],
+//   [e2, -], [ng, -] (integers bit-cast; normals = 0xffffffff when flat).
+// tri_normals: three vec4 per shading-normal record.
+// materials: two vec4 per material: [albedo, -], [emission, -].
+
+const NO_HIT: f32 = 3.0e38;
+const NONE: u32 = 0xffffffffu;
+const STACK: u32 = 64u;
+
+@group(0) @binding(0) var<storage, read> bvh_nodes: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> bvh_tris: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> bvh_order: array<u32>;
+@group(0) @binding(3) var<storage, read> tri_info: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> tri_normals: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> materials: array<vec4<f32>>;
+
+struct Hit {
+    t: f32,
+    // BVH primitive (not the scene triangle: see bvh_order), NONE for a miss.
+    prim: u32,
+}
+
+// The ray parameter of the hit with BVH primitive k in [0, t_max], or NO_HIT.
+fn tri_test(k: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> f32 {
+    let r0 = bvh_tris[3u * k];
+    let r1 = bvh_tris[3u * k + 1u];
+    let r2 = bvh_tris[3u * k + 2u];
+    let oz = dot(r2.xyz, o) + r2.w;
+    let dz = dot(r2.xyz, d);
+    let t = -oz / dz;
+    if (!(t >= 0.0 && t <= t_max)) { return NO_HIT; }
+    let p = o + d * t;
+    let u = dot(r0.xyz, p) + r0.w;
+    let v = dot(r1.xyz, p) + r1.w;
+    if (u >= 0.0 && v >= 0.0 && u + v <= 1.0) { return t; }
+    return NO_HIT;
+}
+
+// Entry distance of the ray into node i's box within [0, t_max], or NO_HIT.
+fn box_test(i: u32, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) -> f32 {
+    let a = bvh_nodes[2u * i].xyz;
+    let b = bvh_nodes[2u * i + 1u].xyz;
+    let t0 = (a - o) * inv_d;
+    let t1 = (b - o) * inv_d;
+    let lo = min(t0, t1);
+    let hi = max(t0, t1);
+    let t_near = max(max(lo.x, lo.y), max(lo.z, 0.0));
+    let t_far = min(min(hi.x, hi.y), min(hi.z, t_max));
+    return select(NO_HIT, t_near, t_near <= t_far);
+}
+
+// 1/d with components below 1e-20 in magnitude replaced by +1e-20, so slab
+// distances stay finite (and -0.0 needs no special case).
+fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
+    return 1.0 / select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
+}
+
+// The closest hit within (0, t_max]; any_hit = true stops at the first one
+// (occlusion). Ordered traversal: the nearer child first, the farther on a
+// stack with its entry distance, skipped when a closer hit was found since.
+fn trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
+    var best = Hit(min(t_max, NO_HIT), NONE);
+    let inv_d = safe_inverse(d);
+    if (box_test(0u, o, inv_d, best.t) == NO_HIT) { return best; }
+    var stack_node: array<u32, STACK>;
+    var stack_t: array<f32, STACK>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let a = bvh_nodes[2u * node];
+        let count = bitcast<u32>(bvh_nodes[2u * node + 1u].w);
+        let first = bitcast<u32>(a.w);
+        var next = NONE;
+        if (count > 0u) {
+            for (var k = first; k < first + count; k = k + 1u) {
+                let t = tri_test(k, o, d, best.t);
+                if (t < best.t) {
+                    best = Hit(t, k);
+                    if (any_hit) { return best; }
+                }
+            }
+        } else {
+            let t0 = box_test(first, o, inv_d, best.t);
+            let t1 = box_test(first + 1u, o, inv_d, best.t);
+            if (t0 != NO_HIT && t1 != NO_HIT) {
+                let near_first = t0 <= t1;
+                next = select(first + 1u, first, near_first);
+                if (sp < STACK) {
+                    stack_node[sp] = select(first, first + 1u, near_first);
+                    stack_t[sp] = select(t0, t1, near_first);
+                    sp = sp + 1u;
+                }
+            } else if (t0 != NO_HIT) {
+                next = first;
+            } else if (t1 != NO_HIT) {
+                next = first + 1u;
+            }
+        }
+        // Pop until a node that can still hold a closer hit.
+        while (next == NONE && sp > 0u) {
+            sp = sp - 1u;
+            if (stack_t[sp] <= best.t) { next = stack_node[sp]; }
+        }
+        if (next == NONE) { break; }
+        node = next;
+    }
+    return best;
+}
+
+fn closest_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
+    return trace(o, d, t_max, false);
+}
+
+fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
+    return trace(o, d, t_max, true).prim != NONE;
+}

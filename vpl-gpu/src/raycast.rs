@@ -1,0 +1,67 @@
+//! Batch ray casting on the device: twin of `Scene::intersect` (closest hit)
+//! and `Scene::occluded`.
+
+use crate::context::{GpuContext, GpuError};
+use crate::kernel::{bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
+use crate::scene::{scene_layout, GpuScene, BVH_WGSL};
+use vpl_core::glam::Vec4;
+use vpl_core::Ray;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    count: u32,
+    row: u32,
+    pad: [u32; 2],
+}
+
+const WORKGROUP: u32 = 64;
+
+/// Casts batches of rays against a [`GpuScene`]: closest hits as
+/// (scene triangle, t), occlusion as booleans, with the CPU BVH's
+/// conventions (hits in [0, t_max]).
+pub struct GpuRayCaster {
+    layout: wgpu::BindGroupLayout,
+    closest: wgpu::ComputePipeline,
+    any_hit: wgpu::ComputePipeline,
+}
+
+impl GpuRayCaster {
+    /// Compiles the kernels.
+    pub fn new(ctx: &GpuContext) -> GpuRayCaster {
+        let scene = scene_layout(ctx);
+        let layout = layout(ctx, "raycast", &[Binding::Uniform, Binding::Read, Binding::ReadWrite]);
+        let source = format!("{BVH_WGSL}\n{}", include_str!("raycast.wgsl"));
+        let closest = pipeline(ctx, "closest", &source, "closest", &[&scene, &layout]);
+        let any_hit = pipeline(ctx, "any_hit", &source, "any_hit", &[&scene, &layout]);
+        GpuRayCaster { layout, closest, any_hit }
+    }
+
+    fn run(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray], any: bool) -> Result<Vec<[u32; 2]>, GpuError> {
+        if rays.is_empty() {
+            return Ok(Vec::new());
+        }
+        let data: Vec<Vec4> = rays.iter().flat_map(|r| [r.o.extend(r.t_max.min(3.0e38)), r.d.extend(0.0)]).collect();
+        let groups = groups_1d(ctx, rays.len() as u64, WORKGROUP);
+        let params = Params { count: rays.len() as u32, row: groups.0 * WORKGROUP, pad: [0; 2] };
+        let b_params = uniform(ctx, "raycast params", &params);
+        let b_rays = storage_init(ctx, "rays", &data);
+        let b_hits = storage(ctx, "hits", rays.len() as u64 * 8)?;
+        let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits]);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        dispatch(&mut enc, if any { &self.any_hit } else { &self.closest }, &[&scene.group, &group], groups);
+        finish(ctx, enc)?;
+        read_back(ctx, &b_hits, rays.len())
+    }
+
+    /// Closest hit of each ray: (scene triangle, t), as `Scene::intersect`'s
+    /// triangle and `Hit::t`.
+    pub fn closest(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<Option<(u32, f32)>>, GpuError> {
+        Ok(self.run(ctx, scene, rays, false)?.into_iter().map(|[t, tri]| (tri != u32::MAX).then(|| (tri, f32::from_bits(t)))).collect())
+    }
+
+    /// Whether each ray meets a surface within its `t_max`, as `Scene::occluded`.
+    pub fn occluded(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<bool>, GpuError> {
+        Ok(self.run(ctx, scene, rays, true)?.into_iter().map(|[o, _]| o != 0).collect())
+    }
+}

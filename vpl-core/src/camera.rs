@@ -142,6 +142,14 @@ impl Camera {
         self.forward
     }
 
+    /// The raster basis of [`Camera::ray`]: (forward, right, up, s_x, s_y),
+    /// the unnormalised direction through NDC (x, y) being
+    /// forward + right·(x·s_x) + up·(y·s_y). For kernels that make camera
+    /// rays themselves.
+    pub fn raster_basis(&self) -> (Vec3, Vec3, Vec3, f32, f32) {
+        (self.forward, self.right, self.true_up, self.sx, self.sy)
+    }
+
     /// The primary ray through raster position (`px`, `py`) (pixel units, y down),
     /// with lens sample `u_lens` (ignored for a pinhole).
     #[inline]

@@ -28,11 +28,26 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// The default adapter of any backend (Vulkan first; GL through EGL as
-    /// the fallback), with the adapter's own limits.
+    /// The default adapter: Vulkan, Metal or DX12 first, then GL (EGL) as
+    /// the fallback. `WGPU_BACKEND` (e.g. `gl`, `vulkan`) restricts the
+    /// choice, which is how the GL path is tested.
     pub fn new() -> Result<GpuContext, GpuError> {
-        let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends: wgpu::Backends::all(), ..Default::default() });
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())).map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let tries = match wgpu::Backends::from_env() {
+            Some(b) => vec![b],
+            None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
+        };
+        let mut why = Vec::new();
+        for backends in tries {
+            let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends, ..Default::default() });
+            match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())) {
+                Ok(adapter) => return Self::open(adapter),
+                Err(e) => why.push(format!("{backends:?}: {e}")),
+            }
+        }
+        Err(GpuError::NoAdapter(why.join("; ")))
+    }
+
+    fn open(adapter: wgpu::Adapter) -> Result<GpuContext, GpuError> {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("vpl-gpu"),

@@ -1,13 +1,15 @@
 //! The cross-bilateral filter on the GPU: twin of [`vpl_shading::CrossBilateral`].
 
 use crate::context::{GpuContext, GpuError};
-use vpl_core::glam::Vec3;
+use crate::gbuffer::DeviceGBuffer;
+use crate::kernel::{bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
+use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, Image};
 use vpl_shading::CrossBilateral;
-use wgpu::util::DeviceExt;
 
 /// [`CrossBilateral`] as a WGSL compute kernel (`filter.wgsl`): the same
-/// window, weights and guide (computed on the CPU by [`CrossBilateral::guide`]).
+/// window and weights, with each pixel's σ_p computed on the device from
+/// the G-buffer as [`CrossBilateral::guide`] does on the host.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuCrossBilateral {
     /// The filter's settings, shared with the CPU twin.
@@ -21,14 +23,44 @@ struct Params {
     height: u32,
     radius: i32,
     normal_power: u32,
+    eye: [f32; 4],
+    sigma: f32,
+    pad: [f32; 3],
 }
 
-fn vec4s(v: impl Iterator<Item = [f32; 4]>) -> Vec<[f32; 4]> {
-    v.collect()
+/// The compiled filter kernel.
+pub(crate) struct FilterKernel {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl FilterKernel {
+    pub fn new(ctx: &GpuContext) -> FilterKernel {
+        let layout = layout(ctx, "filter", &[Binding::Uniform, Binding::Read, Binding::Read, Binding::Read, Binding::ReadWrite]);
+        let pipeline = pipeline(ctx, "filter", include_str!("filter.wgsl"), "main", &[&layout]);
+        FilterKernel { layout, pipeline }
+    }
+
+    /// Records the filter of `input` (one vec4 a pixel of `g`) into `output`.
+    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, f: &CrossBilateral, g: &DeviceGBuffer, input: &wgpu::Buffer, output: &wgpu::Buffer) {
+        let params = Params {
+            width: g.width,
+            height: g.height,
+            radius: 2 * f.periods as i32,
+            normal_power: f.normal_power,
+            eye: g.eye.extend(g.pixel_angle).into(),
+            sigma: f.sigma,
+            pad: [0.0; 3],
+        };
+        let b_params = uniform(ctx, "filter params", &params);
+        let group = bind(ctx, "filter", &self.layout, &[&b_params, &g.pos, &g.normal, input, output]);
+        dispatch(enc, &self.pipeline, &[&group], (g.width.div_ceil(8), g.height.div_ceil(8), 1));
+    }
 }
 
 impl GpuCrossBilateral {
-    /// Filters `e` (one value per G-buffer pixel) on `ctx`'s device.
+    /// Filters `e` (one value per G-buffer pixel) on `ctx`'s device: uploads
+    /// both, runs the kernel, reads the result back.
     pub fn apply(&self, ctx: &GpuContext, gbuf: &GBuffer, e: &Image) -> Result<Image, GpuError> {
         if e.width != gbuf.width || e.height != gbuf.height {
             return Err(GpuError::Invalid(format!("image {}x{} and G-buffer {}x{} differ", e.width, e.height, gbuf.width, gbuf.height)));
@@ -37,59 +69,15 @@ impl GpuCrossBilateral {
         if n == 0 {
             return Ok(e.clone());
         }
-        let guide = self.filter.guide(gbuf);
-        let gp = vec4s(guide.iter().map(|(p, _, s)| [p.x, p.y, p.z, *s]));
-        let gn = vec4s(guide.iter().map(|(_, n, _)| [n.x, n.y, n.z, 0.0]));
-        let input = vec4s(e.data.iter().map(|c| [c.x, c.y, c.z, 0.0]));
-        let params = Params { width: gbuf.width, height: gbuf.height, radius: 2 * self.filter.periods as i32, normal_power: self.filter.normal_power };
-        let d = &ctx.device;
-        let storage = |label: &str, data: &[[f32; 4]]| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytemuck::cast_slice(data), usage: wgpu::BufferUsages::STORAGE });
-        let b_params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("params"), contents: bytemuck::bytes_of(&params), usage: wgpu::BufferUsages::UNIFORM });
-        let (b_p, b_n, b_in) = (storage("guide_p", &gp), storage("guide_n", &gn), storage("input", &input));
-        let size = (n * 16) as u64;
-        let b_out = d.create_buffer(&wgpu::BufferDescriptor { label: Some("output"), size, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
-        let b_read = d.create_buffer(&wgpu::BufferDescriptor { label: Some("read"), size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("filter"), source: wgpu::ShaderSource::Wgsl(include_str!("filter.wgsl").into()) });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("filter"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("filter"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: b_params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: b_p.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: b_n.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: b_in.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: b_out.as_entire_binding() },
-            ],
-        });
-        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("filter") });
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("filter"), timestamp_writes: None });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(gbuf.width.div_ceil(8), gbuf.height.div_ceil(8), 1);
-        }
-        enc.copy_buffer_to_buffer(&b_out, 0, &b_read, 0, size);
-        ctx.queue.submit([enc.finish()]);
-        let slice = b_read.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        d.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::ReadBack(e.to_string()))?;
-        rx.recv().map_err(|e| GpuError::ReadBack(e.to_string()))?.map_err(|e| GpuError::ReadBack(e.to_string()))?;
-        let data: Vec<Vec3> = {
-            let view = slice.get_mapped_range();
-            bytemuck::cast_slice::<u8, [f32; 4]>(&view).iter().map(|v| Vec3::new(v[0], v[1], v[2])).collect()
-        };
-        b_read.unmap();
-        Ok(Image { width: e.width, height: e.height, data })
+        let g = DeviceGBuffer::upload(ctx, gbuf);
+        let input: Vec<Vec4> = e.data.iter().map(|c| c.extend(0.0)).collect();
+        let b_in = storage_init(ctx, "filter input", &input);
+        let b_out = storage(ctx, "filter output", n as u64 * 16)?;
+        let kernel = FilterKernel::new(ctx);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        kernel.encode(ctx, &mut enc, &self.filter, &g, &b_in, &b_out);
+        finish(ctx, enc)?;
+        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
+        Ok(Image { width: e.width, height: e.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
     }
 }

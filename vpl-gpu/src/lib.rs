@@ -21,11 +21,13 @@
 
 mod context;
 mod filter;
+mod gbuffer;
 mod kernel;
 mod raycast;
 mod scene;
 
 pub use context::{GpuContext, GpuError};
 pub use filter::GpuCrossBilateral;
+pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use raycast::GpuRayCaster;
 pub use scene::GpuScene;

@@ -20,14 +20,18 @@
 #![warn(missing_docs)]
 
 mod context;
+mod device;
 mod filter;
 mod gbuffer;
 mod kernel;
 mod raycast;
 mod scene;
+mod shadow_maps;
 
 pub use context::{GpuContext, GpuError};
+pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use raycast::GpuRayCaster;
 pub use scene::GpuScene;
+pub use shadow_maps::GpuShadowMaps;

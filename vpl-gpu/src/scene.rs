@@ -35,7 +35,6 @@ pub struct GpuScene {
     /// Depth of the BVH.
     pub depth: usize,
     buffers: Vec<wgpu::Buffer>,
-    pub(crate) layout: wgpu::BindGroupLayout,
     pub(crate) group: wgpu::BindGroup,
 }
 
@@ -109,7 +108,7 @@ impl GpuScene {
         let layout = scene_layout(ctx);
         let refs: Vec<&wgpu::Buffer> = buffers.iter().collect();
         let group = bind(ctx, "scene", &layout, &refs);
-        Ok(GpuScene { geometry: g.clone(), materials, nodes: bvh.nodes.len(), depth, buffers, layout, group })
+        Ok(GpuScene { geometry: g.clone(), materials, nodes: bvh.nodes.len(), depth, buffers, group })
     }
 
     /// Whether this upload is of `scene`'s geometry (by identity) and materials.

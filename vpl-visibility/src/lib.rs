@@ -38,4 +38,4 @@ mod shadow_maps;
 
 pub use paraboloid::{direction_to_paraboloid, paraboloid_to_direction};
 pub use raytraced::RayTraced;
-pub use shadow_maps::{MapView, ShadowMapError, ShadowMaps, DEFAULT_RESOLUTION};
+pub use shadow_maps::{MapView, ShadowMapError, ShadowMaps, DEFAULT_RESOLUTION, MAX_RESOLUTION};

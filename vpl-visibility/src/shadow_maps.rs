@@ -105,17 +105,7 @@ impl ShadowMaps {
 
     #[inline]
     fn view_of<'a>(&self, m: &'a Map) -> MapView<'a> {
-        MapView {
-            origin: m.origin,
-            frame: m.frame,
-            depth: &m.depth,
-            res: self.res as usize,
-            half: 0.5 * self.res as f32,
-            max: (self.res - 1) as f32,
-            texel: 2.0 / self.res as f32,
-            eps2: 2.0 * self.eps,
-            bias_scale: self.bias_scale,
-        }
+        MapView::new(m.origin, m.frame, &m.depth, self.res, self.eps, self.bias_scale)
     }
 
     /// The map of `slot`, for loops that query one VPL many times.
@@ -143,7 +133,25 @@ pub struct MapView<'a> {
     bias_scale: f32,
 }
 
-impl MapView<'_> {
+impl<'a> MapView<'a> {
+    /// A view of a map held elsewhere (the GPU twin's host copy): `depth`
+    /// holds `res × res` texels row-major, rendered from `origin` in `frame`
+    /// as [`ShadowMaps`] renders them; `eps` is the scene's ray offset.
+    pub fn new(origin: Vec3, frame: LocalFrame, depth: &'a [f32], res: u32, eps: f32, bias_scale: f32) -> MapView<'a> {
+        assert_eq!(depth.len(), (res * res) as usize, "a map of {res}² texels");
+        MapView {
+            origin,
+            frame,
+            depth,
+            res: res as usize,
+            half: 0.5 * res as f32,
+            max: (res - 1) as f32,
+            texel: 2.0 / res as f32,
+            eps2: 2.0 * eps,
+            bias_scale,
+        }
+    }
+
     /// The map's frame (+Z along the VPL normal).
     pub fn frame(&self) -> LocalFrame {
         self.frame

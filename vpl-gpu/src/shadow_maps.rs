@@ -5,7 +5,8 @@ use crate::context::GpuError;
 use crate::device::Gpu;
 use crate::kernel::{bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
 use crate::scene::{scene_layout, BVH_WGSL};
-use std::sync::Mutex;
+use crate::scene::GpuScene;
+use std::sync::{Arc, Mutex};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{LocalFrame, Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
 use vpl_visibility::{MapView, ShadowMapError, MAX_RESOLUTION};
@@ -57,6 +58,7 @@ pub struct GpuShadowMaps {
     device: Option<(wgpu::Buffer, usize, wgpu::Buffer)>,
     host: Mutex<Option<Vec<f32>>>,
     kernel: Option<(wgpu::BindGroupLayout, wgpu::ComputePipeline)>,
+    scene: Option<Arc<GpuScene>>,
 }
 
 impl GpuShadowMaps {
@@ -65,7 +67,7 @@ impl GpuShadowMaps {
         if res == 0 || res > MAX_RESOLUTION {
             return Err(ShadowMapError::Resolution(res));
         }
-        Ok(GpuShadowMaps { gpu, res, eps: 0.0, bias_scale: 1.0, headers: Vec::new(), device: None, host: Mutex::new(None), kernel: None })
+        Ok(GpuShadowMaps { gpu, res, eps: 0.0, bias_scale: 1.0, headers: Vec::new(), device: None, host: Mutex::new(None), kernel: None, scene: None })
     }
 
     /// Texels per side.
@@ -82,6 +84,7 @@ impl GpuShadowMaps {
     fn render(&mut self, scene: &Scene, slots: usize, jobs: &[u32]) -> Result<(), GpuError> {
         let ctx = self.gpu.ctx();
         let gs = self.gpu.scene(scene)?;
+        self.scene = Some(gs.clone());
         let res2 = (self.res * self.res) as u64;
         if self.device.as_ref().is_none_or(|(_, n, _)| *n < slots) {
             let atlas = storage(ctx, "shadow-map atlas", res2 * 4 * slots as u64)?;
@@ -128,6 +131,11 @@ impl GpuShadowMaps {
     /// The device atlas and headers, for the shader: (atlas, headers).
     pub(crate) fn device_buffers(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
         self.device.as_ref().map(|(a, _, h)| (a, h))
+    }
+
+    /// The device scene of the last update.
+    pub(crate) fn device_scene(&self) -> Option<&Arc<GpuScene>> {
+        self.scene.as_ref()
     }
 
     /// The scene's ray offset of the last update.

@@ -1,0 +1,211 @@
+//! Interleaved VPL shading on the device: twin of
+//! [`vpl_shading::InterleavedShader`].
+
+use crate::context::GpuError;
+use crate::device::Gpu;
+use crate::kernel::{bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
+use crate::raytraced::GpuRayTraced;
+use crate::scene::{scene_layout, GpuScene, BVH_WGSL};
+use crate::shadow_maps::GpuShadowMaps;
+use std::sync::Arc;
+use std::time::Instant;
+use vpl_core::glam::{Vec3, Vec4};
+use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
+use vpl_shading::{InterleavedShader, ShadeTimings, CLASSES};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GatherParams {
+    width: u32,
+    height: u32,
+    slots: u32,
+    mode: u32,
+    res: u32,
+    pad: [u32; 3],
+    g_max: f32,
+    eps2: f32,
+    texel: f32,
+    eps: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ModulateParams {
+    count: u32,
+    row: u32,
+    pad: [u32; 2],
+}
+
+struct Kernels {
+    gather_layout: wgpu::BindGroupLayout,
+    gather: wgpu::ComputePipeline,
+    modulate_layout: wgpu::BindGroupLayout,
+    modulate: wgpu::ComputePipeline,
+}
+
+/// [`InterleavedShader`] on the device: the same 4×4 classes, the same
+/// random subsets (drawn by the wrapped CPU shader from the same seed), the
+/// same clamped geometry term and visibility test, then the cross-bilateral
+/// filter and the albedo, all as WGSL kernels. The sums run over the same
+/// slots in the same order; results differ from the CPU's by float rounding
+/// and by the rare receiver whose shadow-map test lands on the other side of
+/// its threshold.
+///
+/// Visibility must be a [`GpuShadowMaps`] or a [`GpuRayTraced`] on the same
+/// [`Gpu`]; with any other, `shade` runs the wrapped CPU shader instead.
+pub struct GpuInterleavedShader {
+    gpu: Gpu,
+    /// The CPU twin: its clamp, filter and seed are the GPU shader's
+    /// settings, and it shades when the visibility is not on the device.
+    pub cpu: InterleavedShader,
+    kernels: Option<Kernels>,
+    /// (slots, subset slots, subset offsets) as uploaded.
+    subsets: Option<(usize, wgpu::Buffer, wgpu::Buffer)>,
+    timings: ShadeTimings,
+}
+
+impl GpuInterleavedShader {
+    /// A shader on `gpu` with `clamp`, the default filter and `seed`, as
+    /// [`InterleavedShader::new`].
+    pub fn new(gpu: Gpu, clamp: Option<GeometryClamp>, seed: u64) -> GpuInterleavedShader {
+        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default() }
+    }
+
+    /// Timings of the last shade: gathering, then filter, albedo and read-back.
+    pub fn timings(&self) -> ShadeTimings {
+        self.timings
+    }
+
+    fn kernels(&mut self) -> &Kernels {
+        let ctx = self.gpu.ctx();
+        self.kernels.get_or_insert_with(|| {
+            let r = Binding::Read;
+            let gather_layout = layout(ctx, "gather", &[Binding::Uniform, r, r, r, r, r, r, r, Binding::ReadWrite]);
+            let source = format!("{BVH_WGSL}\n{}", include_str!("interleaved.wgsl"));
+            let gather = pipeline(ctx, "gather", &source, "gather", &[&scene_layout(ctx), &gather_layout]);
+            let modulate_layout = layout(ctx, "modulate", &[Binding::Uniform, r, r, Binding::ReadWrite]);
+            let modulate = pipeline(ctx, "modulate", include_str!("modulate.wgsl"), "main", &[&modulate_layout]);
+            Kernels { gather_layout, gather, modulate_layout, modulate }
+        })
+    }
+
+    fn subset_buffers(&mut self, slots: usize) {
+        if self.subsets.as_ref().is_some_and(|(n, _, _)| *n == slots) {
+            return;
+        }
+        let subsets = self.cpu.subsets(slots);
+        let mut offsets = vec![0u32];
+        let mut flat = Vec::with_capacity(slots);
+        for s in subsets {
+            flat.extend_from_slice(s);
+            offsets.push(flat.len() as u32);
+        }
+        debug_assert_eq!(offsets.len(), CLASSES + 1);
+        let ctx = self.gpu.ctx();
+        self.subsets = Some((slots, storage_init(ctx, "subset slots", &flat), storage_init(ctx, "subset offsets", &offsets)));
+    }
+
+    fn shade_on_device(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Option<Result<Image, GpuError>> {
+        let any = vis.as_any();
+        // (mode, scene, eps, res, bias scale, maps)
+        let (mode, scene, eps, res, bias, sm): (u32, Arc<GpuScene>, f32, u32, f32, Option<&GpuShadowMaps>) =
+            if let Some(sm) = any.downcast_ref::<GpuShadowMaps>() {
+                (0, sm.device_scene()?.clone(), sm.epsilon(), sm.resolution(), sm.bias_scale, Some(sm))
+            } else if let Some(rt) = any.downcast_ref::<GpuRayTraced>() {
+                let (s, eps) = rt.device_scene()?;
+                (1, s.clone(), *eps, 1, 0.0, None)
+            } else {
+                return None;
+            };
+        Some(self.run(gbuf, vpls, mode, &scene, eps, res, bias, sm))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, mode: u32, scene: &GpuScene, eps: f32, res: u32, bias: f32, sm: Option<&GpuShadowMaps>) -> Result<Image, GpuError> {
+        let t0 = Instant::now();
+        self.subset_buffers(vpls.len());
+        self.kernels();
+        let gpu = self.gpu.clone();
+        let ctx = gpu.ctx();
+        let k = self.kernels.as_ref().expect("compiled");
+        let (_, b_slots, b_offsets) = self.subsets.as_ref().expect("uploaded");
+        let g = gpu.device_gbuffer(gbuf);
+        let n = gbuf.samples.len();
+        let rows: Vec<Vec4> = vpls
+            .slots()
+            .iter()
+            .flat_map(|v| match v {
+                Some(v) => [v.y.extend(1.0), v.n.extend(0.0), v.flux.extend(0.0)],
+                None => [Vec4::ZERO; 3],
+            })
+            .collect();
+        let b_vpls = storage_init(ctx, "vpls", &rows);
+        let dummy;
+        let (atlas, headers) = match sm.and_then(|s| s.device_buffers()) {
+            Some(b) => b,
+            None => {
+                dummy = storage(ctx, "no maps", 16)?;
+                (&dummy, &dummy)
+            }
+        };
+        let params = GatherParams {
+            width: gbuf.width,
+            height: gbuf.height,
+            slots: vpls.len() as u32,
+            mode,
+            res,
+            pad: [0; 3],
+            g_max: self.cpu.clamp.map_or(f32::MAX, |c| c.g_max),
+            eps2: 2.0 * eps,
+            texel: bias * 2.0 / res as f32,
+            eps,
+        };
+        let b_params = uniform(ctx, "gather params", &params);
+        let b_e = storage(ctx, "E", n as u64 * 16)?;
+        let group = bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(8), gbuf.height.div_ceil(8), 1));
+        finish(ctx, enc)?;
+        let t1 = Instant::now();
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let filtered;
+        let e = match &self.cpu.filter {
+            Some(f) => {
+                filtered = storage(ctx, "filtered E", n as u64 * 16)?;
+                gpu.filter_kernel().encode(ctx, &mut enc, f, &g, &b_e, &filtered);
+                &filtered
+            }
+            None => &b_e,
+        };
+        let groups = groups_1d(ctx, n as u64, 64);
+        let mp = uniform(ctx, "modulate params", &ModulateParams { count: n as u32, row: groups.0 * 64, pad: [0; 2] });
+        let b_out = storage(ctx, "radiance", n as u64 * 16)?;
+        let mgroup = bind(ctx, "modulate", &k.modulate_layout, &[&mp, e, &g.albedo, &b_out]);
+        dispatch(&mut enc, &k.modulate, &[&mgroup], groups);
+        finish(ctx, enc)?;
+        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
+        let t2 = Instant::now();
+        self.timings = ShadeTimings { gather_ms: (t1 - t0).as_secs_f64() * 1e3, filter_ms: (t2 - t1).as_secs_f64() * 1e3 };
+        Ok(Image { width: gbuf.width, height: gbuf.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
+    }
+}
+
+impl IndirectShader for GpuInterleavedShader {
+    fn name(&self) -> &'static str {
+        "interleaved"
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
+        match self.shade_on_device(gbuf, vpls, vis) {
+            Some(Ok(img)) => img,
+            Some(Err(e)) => panic!("GPU interleaved shading: {e}"),
+            None => {
+                let img = self.cpu.shade(gbuf, vpls, vis);
+                self.timings = self.cpu.timings();
+                img
+            }
+        }
+    }
+}

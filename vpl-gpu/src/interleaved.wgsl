@@ -1,0 +1,117 @@
+// Interleaved VPL gathering, twin of vpl_shading::InterleavedShader's sums:
+// pixel (x, y) of class c = 4 (y mod 4) + (x mod 4) sums over the slots of
+// subset c
+//     E(x) = (I / n_c) sum_v flux_v min(G(x, v), G_max) V(x, v),
+//     G = cos_y cos_x / |x - y|^2 (with unnormalised cosines: / d2^2),
+// V from the paraboloid shadow maps (mode 0; the test and bias of
+// vpl_visibility::MapView::visible) or shadow rays (mode 1; as
+// vpl_visibility::RayTraced).
+
+struct Params {
+    width: u32,
+    height: u32,
+    // Slots I.
+    slots: u32,
+    // 0: shadow maps, 1: shadow rays.
+    mode: u32,
+    res: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    g_max: f32,
+    // 2 eps (shadow-map bias floor).
+    eps2: f32,
+    // k * 2 / res (bias per unit distance and slope).
+    texel: f32,
+    // The scene's ray offset eps.
+    eps: f32,
+}
+
+@group(1) @binding(0) var<uniform> params: Params;
+@group(1) @binding(1) var<storage, read> g_pos: array<vec4<f32>>;
+@group(1) @binding(2) var<storage, read> g_normal: array<vec4<f32>>;
+// Three vec4 per slot: [y, 1 if the slot holds a VPL], [n_y, -], [flux, -].
+@group(1) @binding(3) var<storage, read> vpls: array<vec4<f32>>;
+// The slots of subset c: subset_slots[subset_offsets[c] .. subset_offsets[c + 1]].
+@group(1) @binding(4) var<storage, read> subset_slots: array<u32>;
+@group(1) @binding(5) var<storage, read> subset_offsets: array<u32>;
+// Shadow maps (vpl_gpu::GpuShadowMaps): four vec4 per slot, [origin, has map], s, t, n;
+// res * res depths per slot.
+@group(1) @binding(6) var<storage, read> headers: array<vec4<f32>>;
+@group(1) @binding(7) var<storage, read> atlas: array<f32>;
+@group(1) @binding(8) var<storage, read_write> out_e: array<vec4<f32>>;
+
+// Whether receiver p (normal n) is visible from the map of `slot`.
+fn map_visible(slot: u32, p: vec3<f32>, n: vec3<f32>) -> bool {
+    let o = headers[4u * slot];
+    let e = p - o.xyz;
+    let e2 = dot(e, e);
+    if (e2 <= 0.0) { return true; }
+    let inv = 1.0 / sqrt(e2);
+    let dist = e2 * inv;
+    let lz = dot(e, headers[4u * slot + 3u].xyz) * inv;
+    if (lz <= 0.0) { return false; }
+    let k = inv / (1.0 + lz);
+    let half = 0.5 * f32(params.res);
+    let top = f32(params.res - 1u);
+    let u = clamp((dot(e, headers[4u * slot + 1u].xyz) * k + 1.0) * half, 0.0, top);
+    let w = clamp((dot(e, headers[4u * slot + 2u].xyz) * k + 1.0) * half, 0.0, top);
+    let depth = atlas[slot * params.res * params.res + u32(w) * params.res + u32(u)];
+    let cos_r = abs(-dot(n, e) * inv);
+    let tan_r = min(sqrt(max(1.0 - cos_r * cos_r, 0.0)) / max(cos_r, 0.1), 10.0);
+    let bias = params.eps2 + params.texel * dist * (1.0 + lz) * (0.5 + tan_r);
+    return dist - bias <= depth;
+}
+
+// Whether the segment from p (stepped off along n) to the VPL's offset
+// origin is unblocked (vpl_core::Scene::visible).
+fn ray_visible(y: vec3<f32>, n_y: vec3<f32>, p: vec3<f32>, n: vec3<f32>) -> bool {
+    let a = p + n * params.eps;
+    let b = y + n_y * params.eps;
+    let d = b - a;
+    let len = length(d);
+    if (len <= 0.0) { return true; }
+    return !occluded(a, d / len, len * (1.0 - 1e-4) - params.eps);
+}
+
+@compute @workgroup_size(8, 8)
+fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= params.width || id.y >= params.height) { return; }
+    let i = id.y * params.width + id.x;
+    let gp = g_pos[i];
+    if (gp.w == 0.0) {
+        out_e[i] = vec4<f32>(0.0);
+        return;
+    }
+    let p = gp.xyz;
+    let n = g_normal[i].xyz;
+    let c = (id.y % 4u) * 4u + id.x % 4u;
+    let first = subset_offsets[c];
+    let last = subset_offsets[c + 1u];
+    var sum = vec3<f32>(0.0);
+    for (var k = first; k < last; k = k + 1u) {
+        let slot = subset_slots[k];
+        let a = vpls[3u * slot];
+        if (a.w == 0.0) { continue; }
+        let n_y = vpls[3u * slot + 1u].xyz;
+        let d = p - a.xyz;
+        let d2 = dot(d, d);
+        let cos_y = dot(n_y, d);
+        let cos_x = -dot(n, d);
+        if (!(cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0)) { continue; }
+        let g = min(cos_y * cos_x / (d2 * d2), params.g_max);
+        var seen = false;
+        if (params.mode == 0u) {
+            seen = headers[4u * slot].w != 0.0 && map_visible(slot, p, n);
+        } else {
+            seen = ray_visible(a.xyz, n_y, p, n);
+        }
+        if (seen) {
+            sum = sum + vpls[3u * slot + 2u].xyz * g;
+        }
+    }
+    let count = last - first;
+    var weight = 0.0;
+    if (count > 0u) { weight = f32(params.slots) / f32(count); }
+    out_e[i] = vec4<f32>(weight * sum, 0.0);
+}

@@ -14,7 +14,7 @@
 
 use crate::metrics::{mse, reference_variance};
 use rayon::prelude::*;
-use crate::pipeline::{Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use crate::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
 use std::fmt::Write as _;
 use vpl_core::glam::Vec3;
 use vpl_core::{stream, Camera, GeometryClamp, Image, Mode, Purpose, Scene, SceneSetup};
@@ -86,6 +86,7 @@ fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSp
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: s.seed,
+        backend: Backend::Cpu,
     }
 }
 

@@ -6,10 +6,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 use vpl_core::image::write_atomic;
-use vpl_core::{CoreError, Frame, GBuffer, GeometryClamp, IndirectShader, SceneSetup, VplSampler, VplVisibility};
+use crate::pipeline::{Backend, ShadingSpec, Stages, VisibilitySpec};
+use vpl_core::{CoreError, Frame, GBuffer, GeometryClamp, SceneSetup, VplSampler};
 use vpl_sampling::{SmcConfig, SmcSampler};
-use vpl_shading::{render_gbuffer, InterleavedShader};
-use vpl_visibility::ShadowMaps;
 
 /// The paper's Table 2 rows: scene, its stand-in here, triangles, VPLs, then
 /// the ten timing columns of [`Table2Row::columns`] (GTX Titan X, 1920×1080).
@@ -81,20 +80,20 @@ impl Table2Row {
 /// `size` with budget `vpls` (after the first frame, whose warm-up and
 /// full set of shadow maps are not timed): the sampler's steps, the shadow
 /// maps of moved VPLs (128²) and interleaved shading with the filter.
-pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<Table2Row, CoreError> {
-    let setup = SceneSetup::load(scene_name)?;
+pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32, backend: Backend) -> Result<(Table2Row, Option<String>), String> {
+    let setup = SceneSetup::load(scene_name).map_err(|e| e.to_string())?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| CoreError::Invalid(e.to_string()))?;
-    let mut sm = ShadowMaps::new(vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| CoreError::Invalid(e.to_string()))?;
+    let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
-    let mut shader = InterleavedShader::new(Some(clamp), 0);
+    let Stages { gbuffer: gstage, visibility: mut sm, mut shader } =
+        Stages::new(backend, VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), ShadingSpec::Interleaved { filter: true }, Some(clamp), 0, vpls)?;
     let mut rows: Vec<[f64; 9]> = Vec::new();
     for k in 0..=frames {
         let f = (start + k).min(count - 1);
-        let (scene, camera) = setup.frame(f)?;
-        let camera = camera.with_resolution(size)?;
+        let (scene, camera) = setup.frame(f).map_err(|e| e.to_string())?;
+        let camera = camera.with_resolution(size).map_err(|e| e.to_string())?;
         let t0 = std::time::Instant::now();
-        let gbuf: GBuffer = render_gbuffer(&scene, &camera);
+        let gbuf: GBuffer = gstage.render(&scene, &camera);
         let gbuffer_ms = t0.elapsed().as_secs_f64() * 1e3;
         let frame = Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let set = smc.next_frame(&frame).clone();
@@ -103,7 +102,7 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
         sm.update(&scene, &set);
         let sm_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t0 = std::time::Instant::now();
-        std::hint::black_box(shader.shade(&gbuf, &set, &sm));
+        std::hint::black_box(shader.shade(&gbuf, &set, sm.as_ref()));
         let shade_ms = t0.elapsed().as_secs_f64() * 1e3 + gbuffer_ms;
         if k > 0 {
             rows.push([st.candidates_ms, st.resampling_ms, st.visibility_ms, st.radiosity_ms, st.knn_ms, st.total_ms, sm_ms, shade_ms, set.moved_count() as f64]);
@@ -111,7 +110,7 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
     }
     let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
     let (sampling, maps, shading) = (col(5), col(6), col(7));
-    Ok(Table2Row {
+    let row = Table2Row {
         scene: scene_name.into(),
         paper_scene: paper_scene.into(),
         triangles: setup.scene.geometry.triangles.len(),
@@ -127,16 +126,18 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
         rendering_total: maps + shading,
         total: sampling + maps + shading,
         moved: col(8),
-    })
+    };
+    Ok((row, gstage.adapter()))
 }
 
 /// Writes `table2.md`, `table2.csv` and `table2.json` into `dir`.
-pub fn write(dir: &Path, rows: &[Table2Row], size: (u32, u32), frames: u32, threads: usize) -> Result<(), CoreError> {
+/// `device` says where the stages ran, in words.
+pub fn write(dir: &Path, rows: &[Table2Row], size: (u32, u32), frames: u32, device: &str) -> Result<(), CoreError> {
     let mut md = String::from("# Table 2: milliseconds per stage of an SMC frame\n\n");
     let _ = writeln!(
         md,
         "Medians over {frames} frames of each scene's camera walk after the first (warm-up) frame, {}×{} pixels, 128² shadow maps, \
-         4×4 interleaved shading with the filter, on this machine's CPU ({threads} threads). The paper's figures (GTX Titan X, \
+         4×4 interleaved shading with the filter, on {device}. The paper's figures (GTX Titan X, \
          1920×1080) in the second table. Interleaved shading includes the G-buffer, as in the paper; the sampler's columns add up \
          to its total only roughly (the remainder is bookkeeping).\n",
         size.0, size.1

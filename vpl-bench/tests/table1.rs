@@ -14,6 +14,7 @@ fn tiny() -> Table1Spec {
         max_depth: 5,
         shadow_map_res: 32,
         seed: 3,
+        backend: vpl_bench::pipeline::Backend::Cpu,
     }
 }
 

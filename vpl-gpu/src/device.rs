@@ -85,10 +85,11 @@ impl Gpu {
     /// The device copy of `host`: the resident G-buffer when `host` is its
     /// read-back, else an upload.
     pub(crate) fn device_gbuffer(&self, host: &GBuffer) -> Arc<DeviceGBuffer> {
-        if let Some(r) = self.0.resident.lock().expect("resident lock").as_ref() {
-            if r.key == key_of(host) && r.ends == ends_of(host) {
-                return r.buffer.clone();
-            }
+        if let Some(r) = self.0.resident.lock().expect("resident lock").as_ref()
+            && r.key == key_of(host)
+            && r.ends == ends_of(host)
+        {
+            return r.buffer.clone();
         }
         Arc::new(DeviceGBuffer::upload(&self.0.ctx, host))
     }

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
-use vpl_shading::{InterleavedShader, ShadeTimings, CLASSES};
+use vpl_shading::{ExhaustiveShader, InterleavedShader, ShadeTimings, CLASSES};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -53,6 +53,7 @@ struct Kernels {
 ///
 /// Visibility must be a [`GpuShadowMaps`] or a [`GpuRayTraced`] on the same
 /// [`Gpu`]; with any other, `shade` runs the wrapped CPU shader instead.
+/// [`GpuInterleavedShader::exhaustive`] makes the exhaustive shader's twin.
 pub struct GpuInterleavedShader {
     gpu: Gpu,
     /// The CPU twin: its clamp, filter and seed are the GPU shader's
@@ -62,13 +63,23 @@ pub struct GpuInterleavedShader {
     /// (slots, subset slots, subset offsets) as uploaded.
     subsets: Option<(usize, wgpu::Buffer, wgpu::Buffer)>,
     timings: ShadeTimings,
+    exhaustive: bool,
 }
 
 impl GpuInterleavedShader {
     /// A shader on `gpu` with `clamp`, the default filter and `seed`, as
     /// [`InterleavedShader::new`].
     pub fn new(gpu: Gpu, clamp: Option<GeometryClamp>, seed: u64) -> GpuInterleavedShader {
-        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default() }
+        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default(), exhaustive: false }
+    }
+
+    /// Every VPL at every pixel, unfiltered: twin of
+    /// [`vpl_shading::ExhaustiveShader`] (one subset of all slots, weight 1).
+    pub fn exhaustive(gpu: Gpu, clamp: Option<GeometryClamp>) -> GpuInterleavedShader {
+        let mut s = GpuInterleavedShader::new(gpu, clamp, 0);
+        s.cpu.filter = None;
+        s.exhaustive = true;
+        s
     }
 
     /// Timings of the last shade: gathering, then filter, albedo and read-back.
@@ -93,7 +104,8 @@ impl GpuInterleavedShader {
         if self.subsets.as_ref().is_some_and(|(n, _, _)| *n == slots) {
             return;
         }
-        let subsets = self.cpu.subsets(slots);
+        let all: Vec<Vec<u32>> = vec![(0..slots as u32).collect(); CLASSES];
+        let subsets = if self.exhaustive { &all[..] } else { self.cpu.subsets(slots) };
         let mut offsets = vec![0u32];
         let mut flat = Vec::with_capacity(slots);
         for s in subsets {
@@ -192,7 +204,7 @@ impl GpuInterleavedShader {
 
 impl IndirectShader for GpuInterleavedShader {
     fn name(&self) -> &'static str {
-        "interleaved"
+        if self.exhaustive { "exhaustive" } else { "interleaved" }
     }
 
     /// # Panics
@@ -201,6 +213,7 @@ impl IndirectShader for GpuInterleavedShader {
         match self.shade_on_device(gbuf, vpls, vis) {
             Some(Ok(img)) => img,
             Some(Err(e)) => panic!("GPU interleaved shading: {e}"),
+            None if self.exhaustive => ExhaustiveShader { clamp: self.cpu.clamp }.shade(gbuf, vpls, vis),
             None => {
                 let img = self.cpu.shade(gbuf, vpls, vis);
                 self.timings = self.cpu.timings();

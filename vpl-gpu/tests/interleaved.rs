@@ -13,7 +13,7 @@ mod common;
 use common::context;
 use vpl_core::{GeometryClamp, Image, IndirectShader, SceneSetup, VplVisibility};
 use vpl_gpu::{Gpu, GpuInterleavedShader, GpuRayTraced, GpuShadowMaps};
-use vpl_shading::InterleavedShader;
+use vpl_shading::{ExhaustiveShader, InterleavedShader};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 fn compare(label: &str, cpu: &Image, gpu: &Image) {
@@ -64,4 +64,12 @@ fn gpu_interleaved_shading_matches_the_cpu_shader() {
         let b = gpu_shader.shade(&gbuf, &set, &grt);
         compare(&format!("shadow rays, filter {filter}"), &a, &b);
     }
+    // Exhaustive shading: every VPL at every pixel.
+    let mut sm = ShadowMaps::new(64).unwrap();
+    let mut gsm = GpuShadowMaps::new(gpu.clone(), 64).unwrap();
+    sm.update(scene, &set);
+    gsm.update(scene, &set);
+    let a = ExhaustiveShader { clamp }.shade(&gbuf, &set, &sm);
+    let b = GpuInterleavedShader::exhaustive(gpu.clone(), clamp).shade(&gbuf, &set, &gsm);
+    compare("exhaustive, shadow maps", &a, &b);
 }

@@ -52,4 +52,4 @@ pub use exhaustive::ExhaustiveShader;
 pub use filter::CrossBilateral;
 pub use gbuffer::render_gbuffer;
 pub use interleaved::{InterleavedShader, ShadeTimings, CLASSES, TILE};
-pub use pipeline::{render_frame, FrameOutput, FrameSettings, StageTimings};
+pub use pipeline::{render_frame, render_frame_on, FrameOutput, FrameSettings, StageTimings};

@@ -89,11 +89,27 @@ pub fn render_frame(
     vis: &mut dyn VplVisibility,
     shader: &mut dyn IndirectShader,
 ) -> FrameOutput {
-    let start = Instant::now();
-    let mut t = StageTimings::default();
     let t0 = Instant::now();
     let gbuffer = render_gbuffer(scene, camera);
-    t.gbuffer_ms = ms(t0);
+    render_frame_on(gbuffer, ms(t0), scene, camera, s, previous, sampler, vis, shader)
+}
+
+/// [`render_frame`] from a G-buffer rendered elsewhere (on a GPU) in
+/// `gbuffer_ms` milliseconds.
+#[allow(clippy::too_many_arguments)]
+pub fn render_frame_on(
+    gbuffer: GBuffer,
+    gbuffer_ms: f64,
+    scene: &Scene,
+    camera: &Camera,
+    s: FrameSettings,
+    previous: Option<&Image>,
+    sampler: &mut dyn VplSampler,
+    vis: &mut dyn VplVisibility,
+    shader: &mut dyn IndirectShader,
+) -> FrameOutput {
+    let start = Instant::now();
+    let mut t = StageTimings { gbuffer_ms, ..StageTimings::default() };
     let mut image = Image::new(camera.resolution.0, camera.resolution.1);
     let mut visibility = VisibilityUpdate::default();
     let mut sampler_report = String::new();
@@ -130,6 +146,6 @@ pub fn render_frame(
             *o += *d;
         }
     }
-    t.total_ms = ms(start);
+    t.total_ms = ms(start) + gbuffer_ms;
     FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_report, indirect }
 }

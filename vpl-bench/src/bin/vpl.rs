@@ -19,6 +19,24 @@ struct Cli {
     command: Command,
 }
 
+/// Where the VPL stages run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// The CPU (rayon).
+    Cpu,
+    /// wgpu kernels: G-buffer, shadow maps or shadow rays, shading, filter (sampling stays on the CPU).
+    Gpu,
+}
+
+impl BackendArg {
+    fn backend(self) -> vpl_bench::pipeline::Backend {
+        match self {
+            BackendArg::Cpu => vpl_bench::pipeline::Backend::Cpu,
+            BackendArg::Gpu => vpl_bench::pipeline::Backend::Gpu,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum ProfileArg {
     /// Minutes on a laptop.
@@ -170,6 +188,9 @@ struct VplArgs {
     /// Light samples per pixel for direct light.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
+    /// Where the G-buffer, visibility and shading run.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
 }
 
 #[derive(Subcommand)]
@@ -342,6 +363,9 @@ enum Command {
         /// Run only shard I of N (units k with k mod N = I); merge later with `vpl merge`.
         #[arg(long)]
         shard: Option<vpl_bench::table1::Shard>,
+        /// Where the VPL stages run (the ground truth is always path traced on the CPU).
+        #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+        backend: BackendArg,
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
@@ -361,6 +385,12 @@ enum Command {
         /// Frames timed per scene (after one warm-up frame).
         #[arg(long, default_value_t = 10)]
         frames: u32,
+        /// Where the G-buffer, shadow maps and shading run (sampling stays on the CPU).
+        #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+        backend: BackendArg,
+        /// Scenes (comma-separated; default the paper's four: courtyard, office, atrium, maze).
+        #[arg(long = "scene", value_delimiter = ',')]
+        scenes: Vec<String>,
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
@@ -646,6 +676,9 @@ fn run(cli: Cli) -> Res<()> {
             vpl_bench::sequence::check_frames(&setup, &range).map_err(|e| format!("--{e}"))?;
             let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
             let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
+            if let (Some(a), false) = (p.adapter(), quiet) {
+                eprintln!("vpl: GPU: {a}");
+            }
             let res = match size {
                 Some(Size(w, h)) => (w, h),
                 None => setup.camera.resolution,
@@ -679,7 +712,7 @@ fn run(cli: Cli) -> Res<()> {
             }
             Ok(())
         }
-        Command::Table1 { profile, scenes, methods, frames, size, truth_spp, seed, shard, threads, out, quiet } => {
+        Command::Table1 { profile, scenes, methods, frames, size, truth_spp, seed, shard, backend, threads, out, quiet } => {
             use vpl_bench::table1::{self, Table1Spec};
             let mut spec = match profile {
                 ProfileArg::Quick => Table1Spec::quick(),
@@ -711,6 +744,7 @@ fn run(cli: Cli) -> Res<()> {
                 spec.truth_spp = n;
             }
             spec.seed = seed;
+            spec.backend = backend.backend();
             if custom {
                 spec.profile = format!("{}+custom", spec.profile);
             }
@@ -749,19 +783,30 @@ fn run(cli: Cli) -> Res<()> {
             }
             Ok(())
         }
-        Command::Table2 { size: Size(w, h), frames, threads, out } => {
+        Command::Table2 { size: Size(w, h), frames, backend, scenes, threads, out } => {
             if frames == 0 {
                 return Err("--frames must be at least 1".into());
             }
             let pool = pool(threads)?;
             std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+            if let Some(bad) = scenes.iter().find(|s| !vpl_bench::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
+                return Err(format!("--scene: '{bad}' is not a Table 2 scene (courtyard, office, atrium, maze)"));
+            }
             let mut rows = Vec::new();
+            let mut device = format!("this machine's CPU ({} threads)", pool.current_num_threads());
             for (paper, scene, _, vpls, _) in vpl_bench::table2::PAPER {
+                if !scenes.is_empty() && !scenes.iter().any(|s| s == scene) {
+                    continue;
+                }
                 eprintln!("vpl: table2: {scene} ({vpls} VPLs, {w}x{h}, {frames} frames)");
                 let start = vpl_bench::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
-                rows.push(pool.install(|| vpl_bench::table2::time_scene(scene, paper, (w, h), vpls, start, frames)).map_err(|e| e.to_string())?);
+                let (row, adapter) = pool.install(|| vpl_bench::table2::time_scene(scene, paper, (w, h), vpls, start, frames, backend.backend()))?;
+                if let Some(a) = adapter {
+                    device = format!("{a} for the G-buffer, shadow maps and shading; sampling on the CPU ({} threads)", pool.current_num_threads());
+                }
+                rows.push(row);
             }
-            vpl_bench::table2::write(&out, &rows, (w, h), frames, pool.current_num_threads()).map_err(|e| e.to_string())?;
+            vpl_bench::table2::write(&out, &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
             eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
             Ok(())
         }
@@ -1012,6 +1057,7 @@ fn pipeline_spec(v: &VplArgs, vpls: usize, max_depth: u32, mode: ModeArg, clamp:
         mode: mode_of(mode),
         direct_samples: v.direct_samples,
         seed,
+        backend: v.backend.backend(),
     })
 }
 
@@ -1035,6 +1081,9 @@ fn render_vpl(
     let (sc, camera) = load_frame(scene, frame, size)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
     let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
+    if let (Some(a), false) = (p.adapter(), quiet) {
+        eprintln!("vpl: GPU: {a}");
+    }
     let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0));
     r.image.write_exr(out).map_err(|e| e.to_string())?;
     r.image.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;

@@ -16,7 +16,7 @@ pub mod report;
 pub mod rows;
 
 use crate::metrics::{temporal_error, tone_mapped_luminance, tone_mapped_stderr, TemporalError};
-use crate::pipeline::{Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use crate::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
 use crate::sequence::run_sequence;
 use rows::Row;
 use serde::{Deserialize, Serialize};
@@ -91,6 +91,9 @@ pub struct Table1Spec {
     pub shadow_map_res: u32,
     /// Seed of every stream.
     pub seed: u64,
+    /// Where the VPL stages run (ground truth is always the CPU path tracer).
+    #[serde(default)]
+    pub backend: Backend,
 }
 
 /// The paper's ground-truth sample count per pixel (§5.2).
@@ -128,6 +131,7 @@ impl Table1Spec {
             max_depth: 5,
             shadow_map_res: 128,
             seed: 0,
+            backend: Backend::Cpu,
         })
     }
 
@@ -383,6 +387,7 @@ pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: Geomet
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: spec.seed,
+        backend: spec.backend,
     }
 }
 

@@ -64,9 +64,19 @@ pub fn markdown(r: &Table1Results) -> String {
          rays through the pixel centre); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
          shading, the cross-bilateral filter and the clamp G_max = I / A; no temporal reprojection; max depth {} (three \
          indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
-         Profile `{}`, {}×{} pixels, seed {}. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL). \
+         Profile `{}`, {}×{} pixels, seed {}, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL). \
          Smallest value in bold; the paper's values (its Table 1) on the right.\n",
-        s.truth_spp, s.shadow_map_res, s.max_depth, s.profile, s.size.0, s.size.1, s.seed
+        s.truth_spp,
+        s.shadow_map_res,
+        s.max_depth,
+        s.profile,
+        s.size.0,
+        s.size.1,
+        s.seed,
+        match s.backend {
+            crate::pipeline::Backend::Cpu => "CPU",
+            crate::pipeline::Backend::Gpu => "GPU",
+        }
     );
     for (title, get, paper) in [
         ("Average |E|", (|m: &super::MethodResult| m.error.e) as fn(&super::MethodResult) -> f64, (|p: &rows::PaperRow| p.e) as fn(&rows::PaperRow) -> [f64; 4]),

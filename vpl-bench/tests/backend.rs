@@ -1,0 +1,61 @@
+//! `--backend gpu` against `--backend cpu`: the same frames of a sequence
+//! through the whole pipeline (sampler, G-buffer, visibility, shading).
+//!
+//! The GPU stages round differently from the CPU's (see the vpl-gpu kernel
+//! tests), and the samplers read the G-buffer, so a rounding difference can
+//! in principle change a sampler's decision and then the VPLs. Tolerance:
+//! per frame, Σ|gpu − cpu|² / Σ|cpu|² ≤ 1e-6 (the shading twins agree to
+//! ~1e-14 on lavapipe; one VPL of 256 moved differently would give ~1e-4).
+//! Without an adapter the test says it skipped, unless VPL_REQUIRE_GPU=1.
+#![cfg(feature = "gpu")]
+
+use vpl_bench::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use vpl_core::{GeometryClamp, Mode, SceneSetup};
+use vpl_sampling::SamplerConfig;
+
+fn spec(sampler: &str, backend: Backend, visibility: VisibilitySpec, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
+    PipelineSpec {
+        sampler: sampler.into(),
+        config: SamplerConfig { vpls, max_depth: 5, ..SamplerConfig::default() },
+        visibility,
+        shading: ShadingSpec::Interleaved { filter: true },
+        clamp: Some(clamp),
+        mode: Mode::Indirect,
+        direct_samples: 1,
+        seed: 3,
+        backend,
+    }
+}
+
+#[test]
+fn gpu_backend_renders_the_cpu_backends_frames() {
+    let setup = SceneSetup::load("office").unwrap();
+    let vpls = 256;
+    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    for (sampler, vis) in [("smc", VisibilitySpec::ShadowMaps(64)), ("ir", VisibilitySpec::RayTraced)] {
+        let mut gpu = match Pipeline::new(spec(sampler, Backend::Gpu, vis, vpls, clamp)) {
+            Ok(p) => p,
+            Err(e) if std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("VPL_REQUIRE_GPU=1 but {e}"),
+            Err(e) => {
+                eprintln!("skipped: {e}");
+                return;
+            }
+        };
+        eprintln!("adapter: {}", gpu.adapter().unwrap());
+        let mut cpu = Pipeline::new(spec(sampler, Backend::Cpu, vis, vpls, clamp)).unwrap();
+        for f in 0..3u32 {
+            let (scene, camera) = setup.frame(f * 10).unwrap();
+            let camera = camera.with_resolution((96, 54)).unwrap();
+            let a = cpu.render(&scene, &camera, f as u64, f as f32 / 3.0);
+            let b = gpu.render(&scene, &camera, f as u64, f as f32 / 3.0);
+            assert_eq!(a.moved, b.moved, "{sampler} frame {f}: VPLs moved");
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for (x, y) in a.image.data.iter().zip(&b.image.data) {
+                num += (*x - *y).length_squared() as f64;
+                den += x.length_squared() as f64;
+            }
+            eprintln!("{sampler} frame {f}: relative squared error {:.3e}, {} moved", num / den, a.moved);
+            assert!(den > 0.0 && num / den <= 1e-6, "{sampler} frame {f}: relative squared error {:e}", num / den);
+        }
+    }
+}

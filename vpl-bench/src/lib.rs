@@ -21,6 +21,8 @@ pub mod cli;
 pub mod compare;
 pub mod figures;
 pub mod georgiev;
+#[cfg(feature = "gpu")]
+pub mod gpu_bench;
 pub mod metrics;
 pub mod pipeline;
 pub mod plot;

@@ -22,6 +22,7 @@ struct Inner {
     gbuffer_kernel: OnceLock<GpuGBufferRenderer>,
     filter_kernel: OnceLock<FilterKernel>,
     resident: Mutex<Option<Resident>>,
+    gbuffer_ms: Mutex<(f64, f64)>,
 }
 
 /// The device G-buffer and the host copy it was read into, recognised by
@@ -55,6 +56,7 @@ impl Gpu {
             gbuffer_kernel: OnceLock::new(),
             filter_kernel: OnceLock::new(),
             resident: Mutex::new(None),
+            gbuffer_ms: Mutex::new((0.0, 0.0)),
         }))
     }
 
@@ -101,9 +103,17 @@ impl Gpu {
     /// for the shader of the same frame.
     pub fn render_gbuffer(&self, scene: &Scene, camera: &vpl_core::Camera) -> Result<GBuffer, GpuError> {
         let gs = self.scene(scene)?;
+        let t0 = std::time::Instant::now();
         let device = self.gbuffer_kernel().render(&self.0.ctx, &gs, scene, camera)?;
+        let t1 = std::time::Instant::now();
         let host = device.read(&self.0.ctx)?;
+        *self.0.gbuffer_ms.lock().expect("timings lock") = ((t1 - t0).as_secs_f64() * 1e3, t1.elapsed().as_secs_f64() * 1e3);
         self.set_resident(&host, Arc::new(device));
         Ok(host)
+    }
+
+    /// Milliseconds of the last [`Gpu::render_gbuffer`]: (kernel, read-back).
+    pub fn gbuffer_timings(&self) -> (f64, f64) {
+        *self.0.gbuffer_ms.lock().expect("timings lock")
     }
 }

@@ -36,6 +36,20 @@ struct ModulateParams {
     pad: [u32; 2],
 }
 
+/// Milliseconds of the steps of the last [`GpuInterleavedShader`] shade,
+/// each waited for on the device.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GpuShadeTimings {
+    /// Uploading the VPLs (and the subsets or G-buffer when they changed).
+    pub upload_ms: f64,
+    /// The gather kernel.
+    pub gather_ms: f64,
+    /// The filter and the albedo kernels.
+    pub filter_ms: f64,
+    /// Reading the image back.
+    pub read_ms: f64,
+}
+
 struct Kernels {
     gather_layout: wgpu::BindGroupLayout,
     gather: wgpu::ComputePipeline,
@@ -63,6 +77,7 @@ pub struct GpuInterleavedShader {
     /// (slots, subset slots, subset offsets) as uploaded.
     subsets: Option<(usize, wgpu::Buffer, wgpu::Buffer)>,
     timings: ShadeTimings,
+    device_timings: GpuShadeTimings,
     exhaustive: bool,
 }
 
@@ -70,7 +85,7 @@ impl GpuInterleavedShader {
     /// A shader on `gpu` with `clamp`, the default filter and `seed`, as
     /// [`InterleavedShader::new`].
     pub fn new(gpu: Gpu, clamp: Option<GeometryClamp>, seed: u64) -> GpuInterleavedShader {
-        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default(), exhaustive: false }
+        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default(), device_timings: GpuShadeTimings::default(), exhaustive: false }
     }
 
     /// Every VPL at every pixel, unfiltered: twin of
@@ -82,9 +97,15 @@ impl GpuInterleavedShader {
         s
     }
 
-    /// Timings of the last shade: gathering, then filter, albedo and read-back.
+    /// Timings of the last shade: gathering (uploads included), then
+    /// filter, albedo and read-back.
     pub fn timings(&self) -> ShadeTimings {
         self.timings
+    }
+
+    /// The device steps of the last shade on the device.
+    pub fn device_timings(&self) -> GpuShadeTimings {
+        self.device_timings
     }
 
     fn kernels(&mut self) -> &Kernels {
@@ -175,8 +196,10 @@ impl GpuInterleavedShader {
         let b_params = uniform(ctx, "gather params", &params);
         let b_e = storage(ctx, "E", n as u64 * 16)?;
         let group = bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
+        finish(ctx, ctx.device.create_command_encoder(&Default::default()))?;
+        let t_up = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(8), gbuf.height.div_ceil(8), 1));
+        dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(4).div_ceil(8), gbuf.height.div_ceil(4).div_ceil(8), CLASSES as u32));
         finish(ctx, enc)?;
         let t1 = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -195,9 +218,12 @@ impl GpuInterleavedShader {
         let mgroup = bind(ctx, "modulate", &k.modulate_layout, &[&mp, e, &g.albedo, &b_out]);
         dispatch(&mut enc, &k.modulate, &[&mgroup], groups);
         finish(ctx, enc)?;
-        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
         let t2 = Instant::now();
-        self.timings = ShadeTimings { gather_ms: (t1 - t0).as_secs_f64() * 1e3, filter_ms: (t2 - t1).as_secs_f64() * 1e3 };
+        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
+        let t3 = Instant::now();
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        self.timings = ShadeTimings { gather_ms: ms(t0, t1), filter_ms: ms(t1, t3) };
+        self.device_timings = GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
         Ok(Image { width: gbuf.width, height: gbuf.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
     }
 }

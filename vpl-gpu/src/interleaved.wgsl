@@ -74,10 +74,16 @@ fn ray_visible(y: vec3<f32>, n_y: vec3<f32>, p: vec3<f32>, n: vec3<f32>) -> bool
     return !occluded(a, d / len, len * (1.0 - 1e-4) - params.eps);
 }
 
+// Deinterleaved dispatch: z is the class c, (x, y) the 4x4 tile, so the
+// invocations of a workgroup share a class and walk the same VPLs in step
+// (uniform loads of the VPL, coherent reads of its shadow map).
 @compute @workgroup_size(8, 8)
 fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= params.width || id.y >= params.height) { return; }
-    let i = id.y * params.width + id.x;
+    let c = id.z;
+    let x = id.x * 4u + c % 4u;
+    let y = id.y * 4u + c / 4u;
+    if (x >= params.width || y >= params.height) { return; }
+    let i = y * params.width + x;
     let gp = g_pos[i];
     if (gp.w == 0.0) {
         out_e[i] = vec4<f32>(0.0);
@@ -85,7 +91,6 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = gp.xyz;
     let n = g_normal[i].xyz;
-    let c = (id.y % 4u) * 4u + id.x % 4u;
     let first = subset_offsets[c];
     let last = subset_offsets[c + 1u];
     var sum = vec3<f32>(0.0);

@@ -34,7 +34,7 @@ pub use context::{GpuContext, GpuError};
 pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
-pub use interleaved::GpuInterleavedShader;
+pub use interleaved::{GpuInterleavedShader, GpuShadeTimings};
 pub use raycast::GpuRayCaster;
 pub use raytraced::GpuRayTraced;
 pub use scene::GpuScene;

@@ -11,7 +11,7 @@
 mod common;
 
 use common::context;
-use vpl_core::{SceneSetup, Vpl, VplSet, VplVisibility};
+use vpl_core::{SceneSetup, Vpl, VplVisibility};
 use vpl_gpu::{Gpu, GpuShadowMaps};
 use vpl_visibility::ShadowMaps;
 

@@ -1,0 +1,147 @@
+//! `vpl bench-gpu` (`cargo xtask bench-gpu`): milliseconds per kernel and
+//! per indirect frame of the GPU backend, SMC sampling on the CPU.
+
+use crate::stages::median;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::time::Instant;
+use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplSampler, VplVisibility};
+use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps};
+use vpl_sampling::{SmcConfig, SmcSampler};
+
+/// Medians of one scene's timed frames, milliseconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct GpuBenchRow {
+    /// Built-in scene.
+    pub scene: String,
+    /// Triangles.
+    pub triangles: usize,
+    /// VPL budget.
+    pub vpls: usize,
+    /// Image size.
+    pub size: (u32, u32),
+    /// G-buffer kernel (camera rays over the device BVH).
+    pub gbuffer: f64,
+    /// Reading the G-buffer back for the CPU sampler.
+    pub gbuffer_read: f64,
+    /// The SMC sampler's step (CPU).
+    pub sampling: f64,
+    /// Shadow maps of the moved VPLs (one dispatch).
+    pub shadow_maps: f64,
+    /// Median VPLs moved per frame.
+    pub moved: f64,
+    /// All maps at once (the first frame: every slot is new), and how many.
+    pub all_maps: f64,
+    /// Maps rendered in the first frame.
+    pub all_maps_count: usize,
+    /// Uploading the VPLs.
+    pub upload: f64,
+    /// Interleaved gathering with shadow-map lookups and the clamp.
+    pub gather: f64,
+    /// Cross-bilateral filter and albedo.
+    pub filter: f64,
+    /// Reading the image back.
+    pub image_read: f64,
+    /// The device kernels of a frame: G-buffer + shadow maps + gather + filter.
+    pub kernels: f64,
+    /// The whole indirect frame as run: sampling, kernels, uploads and read-backs.
+    pub frame: f64,
+}
+
+/// Times `frames` frames (after one untimed warm-up frame, which compiles
+/// the kernels and renders every map) of `scene`'s sequence from frame
+/// `start` at `size` with `vpls` SMC VPLs, 128² maps, 4×4 interleaved
+/// shading with the filter and G_max = I / A. Every step is waited for on
+/// the device, so the times add up.
+pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<GpuBenchRow, String> {
+    let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
+    let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
+    let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
+    let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
+    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
+    let mut rows: Vec<[f64; 11]> = Vec::new();
+    let mut first = (0.0, 0);
+    for k in 0..=frames {
+        let f = (start + k).min(count - 1);
+        let (sc, camera) = setup.frame(f).map_err(|e| e.to_string())?;
+        let camera = camera.with_resolution(size).map_err(|e| e.to_string())?;
+        let t_frame = Instant::now();
+        let gbuf = gpu.render_gbuffer(&sc, &camera).map_err(|e| e.to_string())?;
+        let (g_ms, g_read) = gpu.gbuffer_timings();
+        let frame = Frame { scene: &sc, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
+        let t0 = Instant::now();
+        let set = smc.next_frame(&frame).clone();
+        let s_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t0 = Instant::now();
+        let u = maps.update(&sc, &set);
+        let m_ms = t0.elapsed().as_secs_f64() * 1e3;
+        std::hint::black_box(shader.shade(&gbuf, &set, &maps));
+        let total = t_frame.elapsed().as_secs_f64() * 1e3;
+        let d = shader.device_timings();
+        if k == 0 {
+            first = (m_ms, u.rebuilt);
+        } else {
+            rows.push([g_ms, g_read, s_ms, m_ms, set.moved_count() as f64, d.upload_ms, d.gather_ms, d.filter_ms, d.read_ms, g_ms + m_ms + d.gather_ms + d.filter_ms, total]);
+        }
+    }
+    let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
+    Ok(GpuBenchRow {
+        scene: scene.into(),
+        triangles: setup.scene.geometry.triangles.len(),
+        vpls,
+        size,
+        gbuffer: col(0),
+        gbuffer_read: col(1),
+        sampling: col(2),
+        shadow_maps: col(3),
+        moved: col(4),
+        all_maps: first.0,
+        all_maps_count: first.1,
+        upload: col(5),
+        gather: col(6),
+        filter: col(7),
+        image_read: col(8),
+        kernels: col(9),
+        frame: col(10),
+    })
+}
+
+/// The report: a Markdown table, one row per scene, and the adapter.
+pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) -> String {
+    let mut md = String::from("# GPU backend: milliseconds per kernel and per indirect frame\n\n");
+    let _ = writeln!(
+        md,
+        "Adapter: **{adapter}**. Medians over {frames} frames after a warm-up frame; SMC sampling on the CPU ({threads} threads); \
+         128² paraboloid shadow maps of the moved VPLs by ray casting; 4×4 interleaved shading with the clamp; the cross-bilateral \
+         filter. Each step is waited for, so the columns add up: *kernels* = G-buffer + shadow maps + gather + filter, *frame* = \
+         everything including sampling, uploads and read-backs.\n"
+    );
+    md.push_str("| scene | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling (CPU) | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
+    md.push_str("| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} | {}×{} | {:.2} | {:.2} | {:.2} | {:.2} ({:.0}) | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} ({}) |",
+            r.scene,
+            r.triangles,
+            r.vpls,
+            r.size.0,
+            r.size.1,
+            r.gbuffer,
+            r.gbuffer_read,
+            r.sampling,
+            r.shadow_maps,
+            r.moved,
+            r.upload,
+            r.gather,
+            r.filter,
+            r.image_read,
+            r.kernels,
+            r.frame,
+            r.all_maps,
+            r.all_maps_count
+        );
+    }
+    md
+}

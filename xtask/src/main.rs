@@ -6,11 +6,15 @@
 //!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
 //!   and `results/README.md` linking all of it. `--shard I/N` runs shard I of Table 1's units
 //!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
+//!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
+//!   tracing, the figures and Georgiev's experiment stay on the CPU.
 //! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
 //! - `cargo xtask test`: the whole test suite, as CI runs it.
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
 //! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and
 //!   `office`, and the SMC sampler's steps (the SMC paper's Table 2) on `office` and `maze`.
+//! - `cargo xtask bench-gpu`: milliseconds per GPU kernel and per indirect frame at 1920×1080,
+//!   2048 SMC VPLs, `office` and `atrium`, and the adapter they ran on.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -36,7 +40,8 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10] \
-     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N]>"
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N] \
+     | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR]>"
 }
 
 fn main() -> ExitCode {
@@ -47,6 +52,7 @@ fn main() -> ExitCode {
         Some("test") => test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
+        Some("bench-gpu") => bench_gpu(&args[1..]),
         _ => Err(usage().to_string()),
     };
     match result {
@@ -77,6 +83,13 @@ fn bench_pt(args: &[String]) -> Result<(), String> {
     let mut c = Command::new(vpl);
     c.arg("bench-pt").args(args);
     run(c, "vpl bench-pt")
+}
+
+fn bench_gpu(args: &[String]) -> Result<(), String> {
+    let vpl = build_vpl()?;
+    let mut c = Command::new(vpl);
+    c.arg("bench-gpu").args(args);
+    run(c, "vpl bench-gpu")
 }
 
 fn bench_vpl(args: &[String]) -> Result<(), String> {
@@ -172,6 +185,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     let mut only: Vec<String> = JOBS.iter().map(|s| s.to_string()).collect();
     let mut table1_args: Vec<String> = Vec::new();
     let mut shard: Option<String> = None;
+    let mut backend = String::from("cpu");
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -200,6 +214,13 @@ fn reproduce(args: &[String]) -> Result<(), String> {
                 table1_args.push(v.clone());
             }
             "--shard" => shard = Some(it.next().ok_or("--shard needs I/N")?.clone()),
+            "--backend" => {
+                let b = it.next().ok_or("--backend needs cpu or gpu")?;
+                if b != "cpu" && b != "gpu" {
+                    return Err(format!("--backend: '{b}' is not cpu or gpu"));
+                }
+                backend = b.clone();
+            }
             other => return Err(format!("unknown argument '{other}'\n{}", usage())),
         }
     }
@@ -288,7 +309,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         }
         eprintln!("xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})", profile.name, shard.as_deref().map_or(String::new(), |s| format!(", shard {s}")));
         let mut c = Command::new(&vpl);
-        c.current_dir(root()).args(["table1", "--profile", profile.name]).args(&table1_args).arg("--out").arg(&dir);
+        c.current_dir(root()).args(["table1", "--profile", profile.name, "--backend", &backend]).args(&table1_args).arg("--out").arg(&dir);
         if let Some(s) = &shard {
             c.args(["--shard", s]);
         }
@@ -308,7 +329,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         eprintln!("xtask: [table2] SMC stage timings at {}", profile.table2.0);
         let dir = results.join("table2");
         let mut c = Command::new(&vpl);
-        c.current_dir(root()).args(["table2", "--size", profile.table2.0, "--frames", &profile.table2.1.to_string(), "--out"]).arg(&dir);
+        c.current_dir(root()).args(["table2", "--backend", &backend, "--size", profile.table2.0, "--frames", &profile.table2.1.to_string(), "--out"]).arg(&dir);
         run(c, "vpl table2")?;
         let text = std::fs::read_to_string(dir.join("table2.md")).map_err(|e| e.to_string())?;
         let md = format!("## Table 2 (`table2/`)\n\n{}\n", text.trim_start_matches("# Table 2: milliseconds per stage of an SMC frame\n\n").replace("## ", "### "));

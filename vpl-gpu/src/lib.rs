@@ -1,20 +1,40 @@
 //! # vpl-gpu
 //!
-//! The toolkit's hot loops as wgpu compute kernels (Vulkan, Metal, DX12, GL),
-//! each behind the trait or signature of its CPU twin and tested against it.
-//! This first step holds the device ([`GpuContext`]) and the cross-bilateral
-//! filter ([`GpuCrossBilateral`], twin of [`vpl_shading::CrossBilateral`]).
+//! The toolkit's hot loops as wgpu compute kernels (WGSL; Vulkan, Metal,
+//! DX12, and GL as the fallback), each behind the trait or signature of its
+//! CPU twin and tested against it:
+//!
+//! | kernel | twin | behind |
+//! | --- | --- | --- |
+//! | [`GpuRayCaster`]: closest hit and occlusion over [`GpuScene`] (binary BVH in storage buffers) | `Scene::intersect`, `Scene::occluded` | batch calls |
+//! | [`GpuGBufferRenderer`] / [`Gpu::render_gbuffer`] | `vpl_shading::render_gbuffer` | returns a `GBuffer` |
+//! | [`GpuShadowMaps`]: paraboloid maps of moved slots, one ray per texel | `vpl_visibility::ShadowMaps` | `VplVisibility` |
+//! | [`GpuRayTraced`]: shadow rays in the shading kernel | `vpl_visibility::RayTraced` | `VplVisibility` |
+//! | [`GpuInterleavedShader`]: 4×4 interleaved (or exhaustive) gathering, clamp, filter, albedo | `InterleavedShader`, `ExhaustiveShader` | `IndirectShader` |
+//! | [`GpuCrossBilateral`] | `vpl_shading::CrossBilateral` | `apply` |
+//!
+//! The stages of one frame share a [`Gpu`] (the device, the scene upload and
+//! the G-buffer left on the device). The kernels do the CPU twins'
+//! arithmetic in the same order, so they differ only by rounding (fused
+//! multiply-adds, `exp`, normalisation) and by ties: on lavapipe the
+//! unfiltered shading is bit-equal to the CPU's.
 //!
 //! ```no_run
-//! use vpl_gpu::{GpuContext, GpuCrossBilateral};
-//! use vpl_core::{Image, SceneSetup};
+//! use vpl_core::{GeometryClamp, IndirectShader, SceneSetup, VplVisibility};
+//! use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps};
 //!
-//! let ctx = GpuContext::new().expect("a GPU adapter (lavapipe will do)");
+//! let gpu = Gpu::new().expect("a GPU adapter (lavapipe will do)");
 //! let setup = SceneSetup::load("cornell").unwrap();
-//! let gbuf = vpl_shading::render_gbuffer(&setup.scene, &setup.camera);
-//! let e = Image::new(gbuf.width, gbuf.height);
-//! let f = GpuCrossBilateral::default().apply(&ctx, &gbuf, &e).unwrap();
-//! assert_eq!(f.width, gbuf.width);
+//! let gbuf = gpu.render_gbuffer(&setup.scene, &setup.camera).unwrap();
+//! let vpls = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 256, ..Default::default() })
+//!     .unwrap()
+//!     .sample(&setup.scene, 1)
+//!     .clone();
+//! let mut maps = GpuShadowMaps::new(gpu.clone(), 128).unwrap();
+//! maps.update(&setup.scene, &vpls);
+//! let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(GeometryClamp::new(50.0)), 0);
+//! let indirect = shader.shade(&gbuf, &vpls, &maps);
+//! assert_eq!(indirect.width, gbuf.width);
 //! ```
 
 #![warn(missing_docs)]

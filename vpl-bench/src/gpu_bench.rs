@@ -1,5 +1,6 @@
 //! `vpl bench-gpu` (`cargo xtask bench-gpu`): milliseconds per kernel and
-//! per indirect frame of the GPU backend, SMC sampling on the CPU.
+//! per indirect frame of the GPU backend, SMC sampling on the CPU with its
+//! rays on the GPU.
 
 use crate::stages::median;
 use serde::Serialize;
@@ -57,6 +58,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
+    smc.set_ray_caster(std::sync::Arc::new(vpl_gpu::GpuRays::new(gpu.clone())));
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
@@ -112,7 +114,7 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
     let mut md = String::from("# GPU backend: milliseconds per kernel and per indirect frame\n\n");
     let _ = writeln!(
         md,
-        "Adapter: **{adapter}**. Medians over {frames} frames after a warm-up frame; SMC sampling on the CPU ({threads} threads); \
+        "Adapter: **{adapter}**. Medians over {frames} frames after a warm-up frame; SMC sampling on the CPU ({threads} threads) with its rays (camera points, candidates, indirect visibility) cast on the GPU; \
          128² paraboloid shadow maps of the moved VPLs by ray casting; 4×4 interleaved shading with the clamp; the cross-bilateral \
          filter. Each step is waited for, so the columns add up: *kernels* = G-buffer + shadow maps + gather + filter, *frame* = \
          everything including sampling, uploads and read-backs.\n"

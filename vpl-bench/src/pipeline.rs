@@ -59,7 +59,7 @@ pub struct PipelineSpec {
     pub direct_samples: u32,
     /// Seed of all streams.
     pub seed: u64,
-    /// Where the stages run.
+    /// Where the stages run (and the rays of samplers that batch them).
     pub backend: Backend,
 }
 
@@ -95,6 +95,16 @@ impl GBufferStage {
         #[cfg(feature = "gpu")]
         if let Some(g) = &self.gpu {
             return Some(g.ctx().describe());
+        }
+        None
+    }
+
+    /// The ray caster samplers should batch their rays through on this
+    /// backend (`None`: the CPU BVH).
+    pub fn ray_caster(&self) -> Option<std::sync::Arc<dyn vpl_core::RayCaster>> {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            return Some(std::sync::Arc::new(vpl_gpu::GpuRays::new(g.clone())));
         }
         None
     }
@@ -191,8 +201,11 @@ impl Pipeline {
         if spec.direct_samples == 0 {
             return Err("direct light needs at least 1 sample per pixel".into());
         }
-        let sampler = vpl_sampling::build(&spec.sampler, &spec.config).map_err(|e| e.to_string())?;
+        let mut sampler = vpl_sampling::build(&spec.sampler, &spec.config).map_err(|e| e.to_string())?;
         let Stages { gbuffer, visibility, shader } = Stages::new(spec.backend, spec.visibility, spec.shading, spec.clamp, spec.seed, spec.config.vpls)?;
+        if let Some(rays) = gbuffer.ray_caster() {
+            sampler.set_ray_caster(rays);
+        }
         Ok(Pipeline { spec, sampler, gbuffer, visibility, shader, previous: None })
     }
 

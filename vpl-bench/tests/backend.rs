@@ -1,5 +1,6 @@
 //! `--backend gpu` against `--backend cpu`: the same frames of a sequence
-//! through the whole pipeline (sampler, G-buffer, visibility, shading).
+//! through the whole pipeline (sampler with SMC's rays on the GPU, G-buffer,
+//! visibility, shading).
 //!
 //! The GPU stages round differently from the CPU's (see the vpl-gpu kernel
 //! tests), and the samplers read the G-buffer, so a rounding difference can

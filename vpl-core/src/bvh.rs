@@ -61,6 +61,9 @@ impl PreparedTriangle {
     }
 }
 
+/// How far behind its origin a ray's box traversal starts (see `Bvh::prepare`).
+const BACKSTEP: f32 = 2e-4;
+
 /// A CWBVH with the triangles laid out in its primitive order, so traversal
 /// reads them without an indirection.
 #[derive(Debug)]
@@ -89,15 +92,22 @@ impl Bvh {
         Bvh { cwbvh, tris, order }
     }
 
-    /// Origin, direction and the obvhs ray of `ray`. A component of −0.0
-    /// becomes +0.0: obvhs takes the traversal octant from `d < 0` (false for
-    /// −0.0) but the inverse direction from the sign bit (−1/ε), and a ray
-    /// whose two disagree misses everything. `-direction` of an axis-aligned
-    /// sun or a cosine sample about an axis-aligned normal makes such rays.
+    /// Origin, direction and the obvhs ray of `ray`.
+    ///
+    /// - A component of −0.0 becomes +0.0: obvhs takes the traversal octant
+    ///   from `d < 0` (false for −0.0) but the inverse direction from the
+    ///   sign bit (−1/ε), and a ray whose two disagree misses everything.
+    ///   `-direction` of an axis-aligned sun or a cosine sample about an
+    ///   axis-aligned normal makes such rays.
+    /// - The traversal ray starts [`BACKSTEP`] behind the origin: obvhs's
+    ///   box test enters a child no earlier than t = 10⁻⁴, so a box the ray
+    ///   leaves before that (a wall or ceiling a ray from the edge of the
+    ///   adjacent surface meets at t < 10⁻⁴) would be skipped. Triangles are
+    ///   still tested from the true origin; only the boxes see the shift.
     #[inline(always)]
     fn prepare(ray: &Ray) -> (Vec3A, Vec3A, obvhs::ray::Ray) {
         let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d) + Vec3A::ZERO);
-        (o, d, obvhs::ray::Ray::new(o, d, 0.0, ray.t_max))
+        (o, d, obvhs::ray::Ray::new(o - d * BACKSTEP, d, 0.0, ray.t_max + BACKSTEP))
     }
 
     /// Closest hit: (scene triangle, t).
@@ -106,10 +116,18 @@ impl Bvh {
         let (o, d, r) = Self::prepare(ray);
         let mut hit = RayHit::none();
         let tris = &self.tris;
-        if !self.cwbvh.ray_traverse(r, &mut hit, |r, id| tris[id].intersect(o, d, r.tmax)) {
-            return None;
-        }
-        Some((self.order[hit.primitive_id as usize], hit.t))
+        // The best hit in the ray's own parameter; obvhs sees t + BACKSTEP.
+        let mut best = (ray.t_max, u32::MAX);
+        self.cwbvh.ray_traverse(r, &mut hit, |_, id| {
+            let t = tris[id].intersect(o, d, best.0);
+            if t < best.0 {
+                best = (t, id as u32);
+                t + BACKSTEP
+            } else {
+                f32::INFINITY
+            }
+        });
+        (best.1 != u32::MAX).then(|| (self.order[best.1 as usize], best.0))
     }
 
     /// Early-exit occlusion test (obvhs's `ray_traverse_miss`).
@@ -117,7 +135,16 @@ impl Bvh {
     pub fn occluded(&self, ray: &Ray) -> bool {
         let (o, d, r) = Self::prepare(ray);
         let tris = &self.tris;
-        !self.cwbvh.ray_traverse_miss(r, |_, id| tris[id].intersect(o, d, ray.t_max))
+        !self.cwbvh.ray_traverse_miss(r, |_, id| tris[id].intersect(o, d, ray.t_max) + BACKSTEP)
+    }
+
+    /// The parameter at which `ray` meets scene triangle `tri` within
+    /// `[0, t_max]`, by the same test as [`Bvh::closest`], so a hit found
+    /// elsewhere (a GPU) gets the t this BVH would report.
+    pub fn triangle_t(&self, triangles: &[TriangleData], ray: &Ray, tri: u32) -> Option<f32> {
+        let (o, d, _) = Self::prepare(ray);
+        let t = PreparedTriangle::new(triangles.get(tri as usize)?).intersect(o, d, ray.t_max);
+        t.is_finite().then_some(t)
     }
 }
 
@@ -132,7 +159,7 @@ mod tests {
     /// A roof over the origin: rays straight up hit it whatever the sign of
     /// their zero components, and a sun straight overhead is shadowed.
     #[test]
-    fn negative_zero_directions_traverse_like_positive_ones() {
+    fn negative_zero_directions_and_near_hits_traverse() {
         let mut mesh = Mesh::default();
         mesh.push_quad(Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0), 0);
         mesh.push_quad(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(-5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, -5.0), 0);
@@ -144,6 +171,12 @@ mod tests {
             let t = s.intersect(&Ray::new(o, d)).map(|h| h.t);
             assert!(t.is_some_and(|t| (t - 0.99).abs() < 1e-4), "{d:?}: {t:?}");
         }
+        // Hits nearer than obvhs's box epsilon (10⁻⁴) are found: a ray from
+        // just under the roof meets it at t = 5·10⁻⁵.
+        let near = Vec3::new(0.2, 1.0 - 5e-5, 0.3);
+        let t = s.intersect(&Ray::new(near, Vec3::new(0.3, 0.9, -0.3).normalize())).map(|h| h.t);
+        assert!(t.is_some_and(|t| t > 0.0 && t < 1e-4), "{t:?}");
+        assert!(s.occluded(&Ray::new(near, Vec3::Y)));
         let (ls, _) = s.sample_light(o, 0.5, (0.5, 0.5)).unwrap();
         assert!(ls.wi.x.is_sign_negative(), "the test needs −0.0 in the light direction");
         assert!(!s.light_unoccluded(Vec3::new(0.2, 0.0, 0.3), Vec3::Y, &ls));

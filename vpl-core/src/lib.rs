@@ -71,5 +71,5 @@ pub use scene_file::SceneFile;
 pub use sequence::Sequence;
 pub use setup::SceneSetup;
 pub use surface::{Hit, SurfacePoint};
-pub use traits::{IndirectShader, LightPathGenerator, RadiosityEstimator, VisibilityUpdate, VplSampler, VplVisibility};
+pub use traits::{CpuRays, IndirectShader, LightPathGenerator, RadiosityEstimator, RayCaster, VisibilityUpdate, VplSampler, VplVisibility};
 pub use vpl::{Vpl, VplSet};

@@ -256,15 +256,33 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let (tri, t) = self.geometry.bvh.closest(ray)?;
+        Some(self.hit_at(ray, tri, t))
+    }
+
+    /// The hit of `ray` with triangle `tri`, found elsewhere at about
+    /// `t` (a GPU): t is recomputed by the CPU BVH's triangle test, so the
+    /// hit is the one [`Scene::intersect`] reports whenever both found the
+    /// same triangle; `t` stays where that test misses (an edge, by rounding).
+    #[inline]
+    pub fn hit_near(&self, ray: &Ray, tri: u32, t: f32) -> Hit {
+        let t = self.geometry.bvh.triangle_t(&self.geometry.triangles, ray, tri).unwrap_or(t);
+        self.hit_at(ray, tri, t)
+    }
+
+    /// The hit of `ray` with triangle `tri` at parameter `t`, as
+    /// [`Scene::intersect`] reports it (for ray casters that find (tri, t)
+    /// elsewhere, such as a GPU).
+    #[inline]
+    pub fn hit_at(&self, ray: &Ray, tri: u32, t: f32) -> Hit {
         let td = &self.geometry.triangles[tri as usize];
         let p = ray.at(t);
         if td.normals == u32::MAX {
-            return Some(Hit { t, point: SurfacePoint { p, ng: td.ng, n: td.ng, triangle: tri, material: td.material } });
+            return Hit { t, point: SurfacePoint { p, ng: td.ng, n: td.ng, triangle: tri, material: td.material } };
         }
         let (b1, b2) = barycentrics(td, p);
         let mut point = self.surface_point(tri, b1, b2);
         point.p = p;
-        Some(Hit { t, point })
+        Hit { t, point }
     }
 
     /// The surface `ray` meets, if it reflects light back along the ray: its
@@ -272,7 +290,12 @@ impl Scene {
     /// miss, on a one-sided surface seen from behind, and on a black surface.
     #[inline]
     pub fn reflecting_hit(&self, ray: &Ray) -> Option<(SurfacePoint, Vec3)> {
-        let hit = self.intersect(ray)?;
+        self.reflecting(ray, self.intersect(ray)?)
+    }
+
+    /// [`Scene::reflecting_hit`] for a hit of `ray` found elsewhere.
+    #[inline]
+    pub fn reflecting(&self, ray: &Ray, hit: Hit) -> Option<(SurfacePoint, Vec3)> {
         let wo = -ray.d;
         if wo.dot(hit.point.ng) <= 0.0 && !self.two_sided {
             return None;
@@ -292,12 +315,19 @@ impl Scene {
     /// surface points already offset by the caller, or free points.
     #[inline]
     pub fn visible(&self, a: Vec3, b: Vec3) -> bool {
+        self.shadow_ray(a, b).is_none_or(|r| !self.occluded(&r))
+    }
+
+    /// The shadow ray [`Scene::visible`] casts from `a` toward `b` (stopping
+    /// short of it), or `None` when the two coincide (visible).
+    #[inline]
+    pub fn shadow_ray(&self, a: Vec3, b: Vec3) -> Option<Ray> {
         let d = b - a;
         let len = d.length();
         if len <= 0.0 {
-            return true;
+            return None;
         }
-        !self.occluded(&Ray::segment(a, d / len, len * (1.0 - 1e-4) - self.geometry.epsilon))
+        Some(Ray::segment(a, d / len, len * (1.0 - 1e-4) - self.geometry.epsilon))
     }
 
     /// Whether light sample `ls`, drawn for receiver `x` with geometric

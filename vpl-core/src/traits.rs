@@ -6,6 +6,8 @@
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, Receivers};
 use crate::image::Image;
+use crate::ray::Ray;
+use crate::surface::Hit;
 use crate::scene::Scene;
 use crate::surface::SurfacePoint;
 use crate::vpl::{Vpl, VplSet};
@@ -38,6 +40,9 @@ pub trait VplSampler: Send {
     fn acceptance(&self) -> Option<f32> {
         None
     }
+    /// For samplers that batch their rays (SMC): cast them with `rays` from
+    /// now on (a GPU twin of the BVH, say). Others ignore it.
+    fn set_ray_caster(&mut self, _rays: std::sync::Arc<dyn RayCaster>) {}
 }
 
 /// A source of VPLs from light paths whose number is chosen per call, each
@@ -52,6 +57,38 @@ pub trait LightPathGenerator: Send + Sync {
     /// set estimates the light field without bias. `seed` and `frame` key
     /// the random streams; `frame` is the caller's batch or frame number.
     fn generate(&self, scene: &Scene, budget: usize, seed: u64, frame: u64) -> Vec<Vpl>;
+}
+
+/// Batches of ray queries against a scene: the CPU BVH ([`CpuRays`]) or a
+/// GPU twin. Samplers that cast many rays a frame (SMC's camera points,
+/// candidate rays and indirect-visibility rays) cast them through one.
+pub trait RayCaster: Send + Sync {
+    /// Short name (`cpu`, `gpu`).
+    fn name(&self) -> &'static str;
+    /// The closest hit of each ray, as [`Scene::intersect`].
+    fn intersect(&self, scene: &Scene, rays: &[Ray]) -> Vec<Option<Hit>>;
+    /// Whether each ray is blocked before its `t_max`, as [`Scene::occluded`].
+    fn occluded(&self, scene: &Scene, rays: &[Ray]) -> Vec<bool>;
+}
+
+/// [`RayCaster`] on the scene's own BVH, in parallel (rayon).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuRays;
+
+impl RayCaster for CpuRays {
+    fn name(&self) -> &'static str {
+        "cpu"
+    }
+
+    fn intersect(&self, scene: &Scene, rays: &[Ray]) -> Vec<Option<Hit>> {
+        use rayon::prelude::*;
+        rays.par_iter().map(|r| scene.intersect(r)).collect()
+    }
+
+    fn occluded(&self, scene: &Scene, rays: &[Ray]) -> Vec<bool> {
+        use rayon::prelude::*;
+        rays.par_iter().map(|r| scene.occluded(r)).collect()
+    }
 }
 
 /// What a visibility update did.

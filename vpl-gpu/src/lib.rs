@@ -6,7 +6,7 @@
 //!
 //! | kernel | twin | behind |
 //! | --- | --- | --- |
-//! | [`GpuRayCaster`]: closest hit and occlusion over [`GpuScene`] (binary BVH in storage buffers) | `Scene::intersect`, `Scene::occluded` | batch calls |
+//! | [`GpuRayCaster`]: closest hit and occlusion over [`GpuScene`] (binary BVH in storage buffers) | `Scene::intersect`, `Scene::occluded` | batch calls; [`GpuRays`] is a `RayCaster` (SMC's camera, candidate and visibility rays) |
 //! | [`GpuGBufferRenderer`] / [`Gpu::render_gbuffer`] | `vpl_shading::render_gbuffer` | returns a `GBuffer` |
 //! | [`GpuShadowMaps`]: paraboloid maps of moved slots, one ray per texel | `vpl_visibility::ShadowMaps` | `VplVisibility` |
 //! | [`GpuRayTraced`]: shadow rays in the shading kernel | `vpl_visibility::RayTraced` | `VplVisibility` |
@@ -55,7 +55,7 @@ pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use interleaved::{GpuInterleavedShader, GpuShadeTimings};
-pub use raycast::GpuRayCaster;
+pub use raycast::{GpuRayCaster, GpuRays};
 pub use raytraced::GpuRayTraced;
 pub use scene::GpuScene;
 pub use shadow_maps::GpuShadowMaps;

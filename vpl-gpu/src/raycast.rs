@@ -65,3 +65,45 @@ impl GpuRayCaster {
         Ok(self.run(ctx, scene, rays, true)?.into_iter().map(|[o, _]| o != 0).collect())
     }
 }
+
+/// [`vpl_core::RayCaster`] on the device: batches go through a
+/// [`GpuRayCaster`] over the shared scene upload, and the hits are completed
+/// on the host ([`vpl_core::Scene::hit_near`]): the triangle the GPU found,
+/// at the t the CPU's test of that triangle gives, so a ray that finds the
+/// same triangle gives the CPU's hit bit for bit.
+pub struct GpuRays {
+    gpu: crate::Gpu,
+    caster: std::sync::OnceLock<GpuRayCaster>,
+}
+
+impl GpuRays {
+    /// Ray casting on `gpu`.
+    pub fn new(gpu: crate::Gpu) -> GpuRays {
+        GpuRays { gpu, caster: std::sync::OnceLock::new() }
+    }
+
+    fn caster(&self) -> &GpuRayCaster {
+        self.caster.get_or_init(|| GpuRayCaster::new(self.gpu.ctx()))
+    }
+}
+
+impl vpl_core::RayCaster for GpuRays {
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn intersect(&self, scene: &vpl_core::Scene, rays: &[Ray]) -> Vec<Option<vpl_core::Hit>> {
+        let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
+        let hits = self.caster().closest(self.gpu.ctx(), &gs, rays).unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
+        rays.iter().zip(hits).map(|(r, h)| h.map(|(tri, t)| scene.hit_near(r, tri, t))).collect()
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn occluded(&self, scene: &vpl_core::Scene, rays: &[Ray]) -> Vec<bool> {
+        let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
+        self.caster().occluded(self.gpu.ctx(), &gs, rays).unwrap_or_else(|e| panic!("GPU ray casting: {e}"))
+    }
+}

@@ -59,6 +59,6 @@ mod points;
 mod sampler;
 
 pub use config::{SmcConfig, SmcError};
-pub use points::{camera_points, camera_sees, candidate_hits, mutually_visible, CameraPoint, CandidateHit};
+pub use points::{camera_points, camera_sees, candidate_hits, mutual_ray, mutually_visible, resolve, CameraPoint, CandidateHit};
 pub use vpl_core::resample::resample;
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{stream, Camera, LocalFrame, Purpose, Ray, Scene, SurfacePoint};
+use vpl_core::{stream, Camera, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint};
 
 /// A camera-visible point that can reflect VPL light toward the camera,
 /// normals turned toward the camera.
@@ -30,68 +30,109 @@ pub struct CandidateHit {
 
 /// Casts `n` camera rays through uniformly random raster positions; keeps the
 /// hits that reflect light toward the camera, in ray order. Ray j draws from
-/// stream (seed, iteration, CAMERA_POINTS, j).
-pub fn camera_points(scene: &Scene, camera: &Camera, n: usize, seed: u64, iteration: u64) -> Vec<CameraPoint> {
+/// stream (seed, iteration, CAMERA_POINTS, j); `rays` casts them.
+pub fn camera_points(scene: &Scene, camera: &Camera, rays: &dyn RayCaster, n: usize, seed: u64, iteration: u64) -> Vec<CameraPoint> {
     let (w, h) = (camera.resolution.0 as f32, camera.resolution.1 as f32);
-    let found: Vec<Option<CameraPoint>> = (0..n)
+    let batch: Vec<Ray> = (0..n)
         .into_par_iter()
         .map(|j| {
             let mut rng = stream(seed, iteration, Purpose::CAMERA_POINTS, j as u64);
             let (u, v) = rng.next_2d();
-            let ray = camera.ray(u * w, v * h, rng.next_2d());
-            let (sp, _) = scene.reflecting_hit(&ray)?;
-            Some(CameraPoint { p: sp.p, n: sp.n, ng: sp.ng })
+            camera.ray(u * w, v * h, rng.next_2d())
         })
         .collect();
-    found.into_iter().flatten().collect()
+    let hits = rays.intersect(scene, &batch);
+    batch
+        .iter()
+        .zip(hits)
+        .filter_map(|(ray, hit)| {
+            let (sp, _) = scene.reflecting(ray, hit?)?;
+            Some(CameraPoint { p: sp.p, n: sp.n, ng: sp.ng })
+        })
+        .collect()
 }
 
 /// One cosine-distributed ray from every camera point; keeps the hits on
 /// surfaces that reflect back toward the ray's origin, in ray order. Ray j
-/// draws from stream (seed, iteration, CANDIDATE, j).
-pub fn candidate_hits(scene: &Scene, xs: &[CameraPoint], seed: u64, iteration: u64) -> Vec<CandidateHit> {
+/// draws from stream (seed, iteration, CANDIDATE, j); `rays` casts them.
+pub fn candidate_hits(scene: &Scene, rays: &dyn RayCaster, xs: &[CameraPoint], seed: u64, iteration: u64) -> Vec<CandidateHit> {
     let eps = scene.epsilon();
-    let found: Vec<Option<CandidateHit>> = xs
+    let cast: Vec<(u32, Ray)> = xs
         .par_iter()
         .enumerate()
-        .map(|(j, x)| {
+        .filter_map(|(j, x)| {
             let mut rng = stream(seed, iteration, Purpose::CANDIDATE, j as u64);
             let (u, v) = rng.next_2d();
             let d = LocalFrame::from_normal(x.n).to_world(cosine_hemisphere(u, v));
-            if d.dot(x.ng) <= 0.0 {
-                return None;
-            }
-            let (y, _) = scene.reflecting_hit(&Ray::new(x.p + x.ng * eps, d))?;
-            Some(CandidateHit { y, origin: j as u32 })
+            (d.dot(x.ng) > 0.0).then(|| (j as u32, Ray::new(x.p + x.ng * eps, d)))
         })
         .collect();
-    found.into_iter().flatten().collect()
+    let batch: Vec<Ray> = cast.iter().map(|(_, r)| *r).collect();
+    let hits = rays.intersect(scene, &batch);
+    cast.iter()
+        .zip(hits)
+        .filter_map(|((j, ray), hit)| {
+            let (y, _) = scene.reflecting(ray, hit?)?;
+            Some(CandidateHit { y, origin: *j })
+        })
+        .collect()
+}
+
+/// The shadow ray between camera point `x` and a VPL at `y` with normal
+/// `n_y`: `Err(false)` when a cosine rules the pair out, `Err(true)` when
+/// the two coincide, else the ray whose freedom decides.
+#[inline]
+pub fn mutual_ray(scene: &Scene, x: &CameraPoint, y: Vec3, n_y: Vec3) -> Result<Ray, bool> {
+    let d = y - x.p;
+    if d.dot(x.ng) <= 0.0 || d.dot(x.n) <= 0.0 || d.dot(n_y) >= 0.0 {
+        return Err(false);
+    }
+    let eps = scene.epsilon();
+    scene.shadow_ray(x.p + x.ng * eps, y + n_y * eps).ok_or(true)
 }
 
 /// Whether camera point `x` and a VPL at `y` with normal `n_y` see each
 /// other with both cosines positive: the VPL can light x.
 #[inline]
 pub fn mutually_visible(scene: &Scene, x: &CameraPoint, y: Vec3, n_y: Vec3) -> bool {
-    let d = y - x.p;
-    if d.dot(x.ng) <= 0.0 || d.dot(x.n) <= 0.0 || d.dot(n_y) >= 0.0 {
-        return false;
+    match mutual_ray(scene, x, y, n_y) {
+        Ok(r) => !scene.occluded(&r),
+        Err(v) => v,
     }
-    let eps = scene.epsilon();
-    scene.visible(x.p + x.ng * eps, y + n_y * eps)
 }
 
-/// Whether the camera at `eye` still sees camera point `x` from the side it
-/// was seen from, inside the image (the mailbox test of §3.2.2).
-#[inline]
-pub fn camera_sees(scene: &Scene, camera: &Camera, x: &CameraPoint) -> bool {
-    let to_eye = camera.origin - x.p;
-    if to_eye.dot(x.ng) <= 0.0 {
-        return false;
-    }
-    let Some((px, py)) = camera.project(x.p) else { return false };
+/// The mailbox test of §3.2.2 for many points: whether the camera still
+/// sees each camera point from the side it was seen from, inside the image.
+pub fn camera_sees(scene: &Scene, camera: &Camera, rays: &dyn RayCaster, xs: &[Option<CameraPoint>]) -> Vec<bool> {
     let (w, h) = (camera.resolution.0 as f32, camera.resolution.1 as f32);
-    if !(0.0..w).contains(&px) || !(0.0..h).contains(&py) {
-        return false;
-    }
-    scene.visible(x.p + x.ng * scene.epsilon(), camera.origin)
+    let eps = scene.epsilon();
+    let tests: Vec<Result<Ray, bool>> = xs
+        .iter()
+        .map(|x| {
+            let Some(x) = x else { return Err(false) };
+            if (camera.origin - x.p).dot(x.ng) <= 0.0 {
+                return Err(false);
+            }
+            let Some((px, py)) = camera.project(x.p) else { return Err(false) };
+            if !(0.0..w).contains(&px) || !(0.0..h).contains(&py) {
+                return Err(false);
+            }
+            scene.shadow_ray(x.p + x.ng * eps, camera.origin).ok_or(true)
+        })
+        .collect();
+    resolve(scene, rays, tests)
+}
+
+/// Answers a list of visibility tests, casting the ones that need a ray as
+/// one batch.
+pub fn resolve(scene: &Scene, rays: &dyn RayCaster, tests: Vec<Result<Ray, bool>>) -> Vec<bool> {
+    let batch: Vec<Ray> = tests.iter().filter_map(|t| t.as_ref().ok().copied()).collect();
+    let mut blocked = rays.occluded(scene, &batch).into_iter();
+    tests
+        .into_iter()
+        .map(|t| match t {
+            Ok(_) => !blocked.next().expect("one answer per ray"),
+            Err(v) => v,
+        })
+        .collect()
 }

@@ -1,7 +1,7 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::points::{camera_points, camera_sees, candidate_hits, mutually_visible, CameraPoint, CandidateHit};
+use crate::points::{camera_points, camera_sees, candidate_hits, mutual_ray, resolve, CameraPoint, CandidateHit};
 use vpl_core::resample::resample;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -9,7 +9,8 @@ use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
 use vpl_core::rng::mix64;
 use vpl_core::scene::LightingKey;
-use vpl_core::{stream, Camera, Frame, Purpose, RadiosityEstimator, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
+use std::sync::Arc;
+use vpl_core::{stream, Camera, CpuRays, Frame, Purpose, RadiosityEstimator, RayCaster, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
 use vpl_density::{set_densities, KnnDensity};
 use vpl_pathtrace::PathRadiosity;
 
@@ -106,6 +107,7 @@ pub struct SmcStats {
 pub struct SmcSampler {
     config: SmcConfig,
     estimator: Estimator,
+    rays: Arc<dyn RayCaster>,
     particles: Vec<Option<Particle>>,
     set: VplSet,
     next_id: u64,
@@ -148,6 +150,7 @@ impl SmcSampler {
         Ok(SmcSampler {
             config,
             estimator,
+            rays: Arc::new(CpuRays),
             particles: vec![None; config.vpls],
             set: VplSet::new(config.vpls),
             next_id: 0,
@@ -231,13 +234,15 @@ impl SmcSampler {
         // Line 3: camera points X.
         let t0 = Instant::now();
         let n_rays = c.vpls * c.resample_ratio;
-        let xs = camera_points(scene, camera, n_rays, seed, it);
+        let rays = self.rays.as_ref();
+        let xs = camera_points(scene, camera, rays, n_rays, seed, it);
         st.camera_points = xs.len();
         tm.candidates_ms += ms(t0);
 
         // Line 4: INVALID ← Y \ indirectly visible VPLs (mailboxing, then V rays).
         let t0 = Instant::now();
-        let mut valid: Vec<bool> = self.particles.par_iter().map(|p| p.is_some_and(|p| camera_sees(scene, camera, &p.anchor))).collect();
+        let anchors: Vec<Option<CameraPoint>> = self.particles.iter().map(|p| p.map(|p| p.anchor)).collect();
+        let mut valid: Vec<bool> = camera_sees(scene, camera, rays, &anchors);
         st.mailbox_valid = valid.iter().filter(|v| **v).count();
         if !xs.is_empty() {
             for round in 0..c.visibility_iterations {
@@ -245,19 +250,23 @@ impl SmcSampler {
                 if unverified.is_empty() {
                     break;
                 }
-                let found: Vec<Option<CameraPoint>> = unverified
+                // Up to visibility_rays camera points per unverified VPL, all
+                // drawn first; the first that sees the VPL becomes its mailbox.
+                let tries: Vec<(usize, CameraPoint, Result<vpl_core::Ray, bool>)> = unverified
                     .par_iter()
-                    .map(|&s| {
-                        let p = self.particles[s].as_ref()?;
+                    .flat_map_iter(|&s| {
+                        let p = self.particles[s].expect("unverified slots hold a VPL");
                         let mut rng = stream(seed, it, Purpose::INDIRECT_VISIBILITY, (s as u64) << 8 | round as u64);
-                        (0..c.visibility_rays).find_map(|_| {
-                            let x = &xs[rng.below(xs.len() as u32) as usize];
-                            mutually_visible(scene, x, p.y.p, p.y.n).then_some(*x)
-                        })
+                        let draws: Vec<CameraPoint> = (0..c.visibility_rays).map(|_| xs[rng.below(xs.len() as u32) as usize]).collect();
+                        draws.into_iter().map(move |x| (s, x, mutual_ray(scene, &x, p.y.p, p.y.n)))
                     })
                     .collect();
-                for (&s, f) in unverified.iter().zip(found) {
-                    if let (Some(x), Some(p)) = (f, self.particles[s].as_mut()) {
+                let seen = resolve(scene, rays, tries.iter().map(|(_, _, t)| t.clone()).collect());
+                for ((s, x, _), v) in tries.into_iter().zip(seen) {
+                    if !v || valid[s] {
+                        continue;
+                    }
+                    if let Some(p) = self.particles[s].as_mut() {
                         p.anchor = x;
                         valid[s] = true;
                         st.ray_valid += 1;
@@ -271,7 +280,7 @@ impl SmcSampler {
 
         // Line 5: hits of rays from X.
         let t0 = Instant::now();
-        let hits = candidate_hits(scene, &xs, seed, it);
+        let hits = candidate_hits(scene, rays, &xs, seed, it);
         st.hits = hits.len();
         tm.candidates_ms += ms(t0);
 
@@ -459,6 +468,12 @@ impl VplSampler for SmcSampler {
             }
         }
         self.iterate(frame.scene, frame.camera, frame.seed)
+    }
+
+    /// Camera points, candidate rays, mailbox and indirect-visibility rays
+    /// go through `rays` (the CPU BVH by default).
+    fn set_ray_caster(&mut self, rays: Arc<dyn RayCaster>) {
+        self.rays = rays;
     }
 
     fn report(&self) -> String {

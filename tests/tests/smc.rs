@@ -230,18 +230,23 @@ fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
 
 /// Moving into `office`'s corridor: the camera cuts from the corridor's
 /// start to a door at z = −30 and looks into the lit room behind it, which
-/// the first view did not see. Per frame after the cut: the share of VPLs in
-/// the room and the indirect light on the room's pixels (ray-traced
-/// visibility, exhaustive shading, default clamp), against a sampler warmed
-/// up at the new view. Before the cut the room holds under a tenth of the
-/// VPL share it holds at steady state (measured: 1.5 % of the VPLs against
-/// 24 %). Bound: the room's light reaches 80 % of the steady state's within
-/// 10 frames (a third of a second at 30 fps; measured: 9). Few VPLs suffice
-/// for the energy: the kNN density of a sparse region is low, so its VPLs
-/// carry large flux; the VPL count itself grows by at most M_max = 16 a
-/// frame. (When VPLs rendered with the radiosity estimates their selection
-/// used, the selected estimates were biased high and this reached 80 % in 3
-/// frames: a measure of the bias, not of the sampler's speed.)
+/// the first view did not see. Per frame after the cut: the indirect light
+/// on the room's pixels (ray-traced visibility, exhaustive shading, default
+/// clamp) against a sampler warmed up at the new view, and the share of VPLs
+/// in the room. Before the cut the room holds under a tenth of the VPL
+/// share it holds at steady state (measured: 1.5 % of the VPLs against
+/// 20–24 %).
+///
+/// One run is a poor measure of the speed: the frame at which a single seed
+/// reaches 80 % of its steady light ranges from 1 to 19 over seeds 8–13
+/// (the steady state itself is one noisy run). The test averages the ratio
+/// over those six seeds. Bound: the mean reaches 80 % within 18 frames
+/// (0.6 s at 30 fps; measured: 14, and 12 before the BVH found hits nearer
+/// than 10⁻⁴; the per-seed spread, about 5 frames, puts the standard error
+/// of the mean near 2 frames, so the bound is two of them above the
+/// measurement). The VPL count in the room grows by at most M_max = 16 a
+/// frame; few VPLs suffice for the energy because the kNN density of a
+/// sparse region is low, so its VPLs carry large flux.
 #[test]
 fn newly_visible_rooms_fill_within_frames() {
     let setup = SceneSetup::load("office").unwrap();
@@ -260,24 +265,28 @@ fn newly_visible_rooms_fill_within_frames() {
         room_px.iter().map(|&i| vpl_core::image::luminance(img.data[i]) as f64).sum::<f64>()
     };
     let share = |set: &VplSet| set.iter().filter(|(_, v)| in_room(v.y)).count() as f64 / set.stored() as f64;
-    let target = warmed(scene, &b, 1024, 100, 8);
-    let (target_light, target_share) = (room_light(target.vpls()), share(target.vpls()));
-    let mut s = warmed(scene, &a, 1024, 100, 8);
-    let before = (room_light(s.vpls()) / target_light, share(s.vpls()));
-    let mut trace = Vec::new();
-    let mut filled_at = None;
-    for f in 1..=12 {
-        let set = s.iterate(scene, &b, 8);
-        let l = room_light(set) / target_light;
-        trace.push((f, l, share(set)));
-        if filled_at.is_none() && l >= 0.8 {
-            filled_at = Some(f);
+    let (frames, bound) = (20, 18);
+    let seeds = [8u64, 9, 10, 11, 12, 13];
+    let mut mean = vec![0.0f64; frames];
+    for seed in seeds {
+        let target = warmed(scene, &b, 1024, 100, seed);
+        let (target_light, target_share) = (room_light(target.vpls()), share(target.vpls()));
+        let mut s = warmed(scene, &a, 1024, 100, seed);
+        let before = share(s.vpls());
+        assert!(before < 0.1 * target_share, "seed {seed}: the room already held VPLs before the cut: {before}, steady share {target_share}");
+        let mut curve = Vec::new();
+        for m in mean.iter_mut() {
+            let l = room_light(s.iterate(scene, &b, seed)) / target_light;
+            *m += l / seeds.len() as f64;
+            curve.push(l);
         }
+        let first = curve.iter().position(|l| *l >= 0.8).map(|i| i + 1);
+        eprintln!("seed {seed}: VPL share {before:.3} before the cut, {target_share:.3} steady; {} after {frames} frames; 80 % of the light at frame {first:?}", share(s.vpls()));
     }
-    eprintln!("room light / VPL share before the cut {before:?}, steady share {target_share:.3}; per frame: {trace:?}");
-    assert!(before.1 < 0.1 * target_share, "the room already held VPLs before the cut: {before:?}, steady share {target_share}");
-    let f = filled_at.expect("the room's light did not reach 80 % within 12 frames");
-    assert!(f <= 10, "the room's light reached 80 % only after {f} frames");
+    let first = mean.iter().position(|l| *l >= 0.8).map(|i| i + 1);
+    eprintln!("mean light ratio per frame: {:?}", mean.iter().map(|l| (l * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+    let f = first.expect("the room's mean light did not reach 80 % within 20 frames");
+    assert!(f <= bound, "the room's mean light reached 80 % only after {f} frames");
 }
 
 /// SMC frames give the same VPLs, bit for bit, on one thread and on two.

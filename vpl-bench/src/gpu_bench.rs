@@ -25,8 +25,15 @@ pub struct GpuBenchRow {
     pub gbuffer: f64,
     /// Reading the G-buffer back for the CPU sampler.
     pub gbuffer_read: f64,
-    /// The SMC sampler's step (CPU).
+    /// The SMC sampler's step (CPU, its rays on the GPU).
     pub sampling: f64,
+    /// Of which: camera points, candidate rays and indirect visibility
+    /// (rays on the GPU, bookkeeping on the CPU).
+    pub smc_rays: f64,
+    /// Of which: radiosity estimates (16 NEE paths per VPL, CPU).
+    pub smc_radiosity: f64,
+    /// Of which: k-d trees and kNN densities (CPU).
+    pub smc_knn: f64,
     /// Shadow maps of the moved VPLs (one dispatch).
     pub shadow_maps: f64,
     /// Median VPLs moved per frame.
@@ -62,7 +69,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
-    let mut rows: Vec<[f64; 11]> = Vec::new();
+    let mut rows: Vec<[f64; 14]> = Vec::new();
     let mut first = (0.0, 0);
     for k in 0..=frames {
         let f = (start + k).min(count - 1);
@@ -75,6 +82,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
         let t0 = Instant::now();
         let set = smc.next_frame(&frame).clone();
         let s_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let st = smc.timings();
         let t0 = Instant::now();
         let u = maps.update(&sc, &set);
         let m_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -84,7 +92,22 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
         if k == 0 {
             first = (m_ms, u.rebuilt);
         } else {
-            rows.push([g_ms, g_read, s_ms, m_ms, set.moved_count() as f64, d.upload_ms, d.gather_ms, d.filter_ms, d.read_ms, g_ms + m_ms + d.gather_ms + d.filter_ms, total]);
+            rows.push([
+                g_ms,
+                g_read,
+                s_ms,
+                m_ms,
+                set.moved_count() as f64,
+                d.upload_ms,
+                d.gather_ms,
+                d.filter_ms,
+                d.read_ms,
+                g_ms + m_ms + d.gather_ms + d.filter_ms,
+                total,
+                st.candidates_ms + st.visibility_ms,
+                st.radiosity_ms,
+                st.knn_ms,
+            ]);
         }
     }
     let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
@@ -96,6 +119,9 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
         gbuffer: col(0),
         gbuffer_read: col(1),
         sampling: col(2),
+        smc_rays: col(11),
+        smc_radiosity: col(12),
+        smc_knn: col(13),
         shadow_maps: col(3),
         moved: col(4),
         all_maps: first.0,
@@ -144,6 +170,10 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
             r.all_maps,
             r.all_maps_count
         );
+    }
+    md.push_str("\nSMC sampling by step (ms; rays on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per new VPL) | kNN | total |\n| --- | ---: | ---: | ---: | ---: |\n");
+    for r in rows {
+        let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
     }
     md
 }

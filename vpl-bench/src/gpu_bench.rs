@@ -171,7 +171,7 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
             r.all_maps_count
         );
     }
-    md.push_str("\nSMC sampling by step (ms; rays on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per new VPL) | kNN | total |\n| --- | ---: | ---: | ---: | ---: |\n");
+    md.push_str("\nSMC sampling by step (ms; rays on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL) | kNN | total |\n| --- | ---: | ---: | ---: | ---: |\n");
     for r in rows {
         let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
     }

@@ -216,3 +216,24 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--backend gpu` where no adapter of the allowed backends exists (Metal
+/// on a machine without it): one line naming the option, exit code 2.
+#[cfg(all(feature = "gpu", not(target_os = "macos")))]
+#[test]
+fn gpu_backend_without_an_adapter_is_one_line() {
+    let dir = scratch("no-adapter");
+    let out = dir.join("out.exr");
+    let o = vpl()
+        .env("WGPU_BACKEND", "metal")
+        .args(["render", "--scene", "cornell", "--method", "vpl", "--backend", "gpu", "--size", "8x8", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(o.status.code(), Some(2), "status {:?}, stderr {err}", o.status);
+    assert_eq!(lines.len(), 1, "expected one line, got {err:?}");
+    assert!(lines[0].starts_with("vpl: error: ") && lines[0].contains("--backend gpu"), "{:?}", lines[0]);
+    assert!(!out.exists());
+}

@@ -261,7 +261,7 @@ impl SmcSampler {
                         draws.into_iter().map(move |x| (s, x, mutual_ray(scene, &x, p.y.p, p.y.n)))
                     })
                     .collect();
-                let seen = resolve(scene, rays, tries.iter().map(|(_, _, t)| t.clone()).collect());
+                let seen = resolve(scene, rays, tries.iter().map(|(_, _, t)| *t).collect());
                 for ((s, x, _), v) in tries.into_iter().zip(seen) {
                     if !v || valid[s] {
                         continue;

@@ -21,6 +21,17 @@ use glam::Vec3;
 pub trait RadiosityEstimator {
     /// Exitant radiance of `y` toward its front side (normal `y.n`), emission excluded.
     fn radiosity(&self, scene: &Scene, y: &SurfacePoint, seed: u64) -> Vec3;
+
+    /// [`RadiosityEstimator::radiosity`] of many (point, seed) pairs, the
+    /// same value each: what an estimator that runs in batches (on a GPU)
+    /// implements. By default, the points in parallel (rayon).
+    fn radiosity_many(&self, scene: &Scene, points: &[(SurfacePoint, u64)]) -> Vec<Vec3>
+    where
+        Self: Sync,
+    {
+        use rayon::prelude::*;
+        points.par_iter().map(|(y, seed)| self.radiosity(scene, y, *seed)).collect()
+    }
 }
 
 /// A VPL sampler (Instant Radiosity, Russian-roulette acceptance,

@@ -302,12 +302,8 @@ impl SmcSampler {
         let t0 = Instant::now();
         let first_id = self.next_id;
         self.next_id += chosen.len() as u64;
-        let est = &self.estimator;
-        let radiances: Vec<Vec3> = chosen
-            .par_iter()
-            .enumerate()
-            .map(|(i, &h)| est.radiosity(scene, &hits[h].y, Self::radiosity_seed(seed, first_id + i as u64)))
-            .collect();
+        let jobs: Vec<(SurfacePoint, u64)> = chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::radiosity_seed(seed, first_id + i as u64))).collect();
+        let radiances: Vec<Vec3> = self.estimator.radiosity_many(scene, &jobs);
         tm.radiosity_ms += ms(t0);
 
         // Line 8: candidate densities against Y with k = 1 (§3.2.4).
@@ -376,22 +372,31 @@ impl SmcSampler {
         // rendering radiosity of a VPL that just joined Y ([`Self::render_seed`]).
         let t0 = Instant::now();
         let key = LightingKey::of(scene);
-        let est = &self.estimator;
         if self.lighting.as_ref() != Some(&key) {
             st.relit = self.lighting.is_some();
-            self.particles.par_iter_mut().flatten().for_each(|p| {
-                p.selection_radiance = est.radiosity(scene, &p.y, Self::radiosity_seed(seed, p.id));
-                p.radiance = est.radiosity(scene, &p.y, Self::render_seed(seed, p.id));
-            });
+            let slots: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some()).collect();
+            let jobs: Vec<(SurfacePoint, u64)> = slots
+                .iter()
+                .flat_map(|&s| {
+                    let p = self.particles[s].expect("occupied");
+                    [(p.y, Self::radiosity_seed(seed, p.id)), (p.y, Self::render_seed(seed, p.id))]
+                })
+                .collect();
+            let l = self.estimator.radiosity_many(scene, &jobs);
+            for (k, &s) in slots.iter().enumerate() {
+                if let Some(p) = self.particles[s].as_mut() {
+                    p.selection_radiance = l[2 * k];
+                    p.radiance = l[2 * k + 1];
+                }
+            }
             self.lighting = Some(key);
         } else {
-            let fresh: Vec<(usize, Vec3)> = added
-                .par_iter()
-                .filter_map(|&s| self.particles[s].map(|p| (s, est.radiosity(scene, &p.y, Self::render_seed(seed, p.id)))))
-                .collect();
-            for (s, l) in fresh {
+            let jobs: Vec<(SurfacePoint, u64)> = added.iter().filter_map(|&s| self.particles[s].map(|p| (p.y, Self::render_seed(seed, p.id)))).collect();
+            let l = self.estimator.radiosity_many(scene, &jobs);
+            let mut fresh = l.into_iter();
+            for &s in &added {
                 if let Some(p) = self.particles[s].as_mut() {
-                    p.radiance = l;
+                    p.radiance = fresh.next().expect("one estimate per added VPL");
                 }
             }
         }

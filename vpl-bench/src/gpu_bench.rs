@@ -1,6 +1,6 @@
 //! `vpl bench-gpu` (`cargo xtask bench-gpu`): milliseconds per kernel and
-//! per indirect frame of the GPU backend, SMC sampling on the CPU with its
-//! rays on the GPU.
+//! per indirect frame of the GPU backend, SMC sampling with its rays and
+//! radiosity estimates on the GPU.
 
 use crate::stages::median;
 use serde::Serialize;
@@ -30,7 +30,7 @@ pub struct GpuBenchRow {
     /// Of which: camera points, candidate rays and indirect visibility
     /// (rays on the GPU, bookkeeping on the CPU).
     pub smc_rays: f64,
-    /// Of which: radiosity estimates (16 NEE paths per VPL, CPU).
+    /// Of which: radiosity estimates (16 NEE paths per candidate and new VPL, GPU).
     pub smc_radiosity: f64,
     /// Of which: k-d trees and kNN densities (CPU).
     pub smc_knn: f64,
@@ -66,6 +66,8 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
     smc.set_ray_caster(std::sync::Arc::new(vpl_gpu::GpuRays::new(gpu.clone())));
+    let g = gpu.clone();
+    smc.set_radiosity_estimator(&move |paths, max_bounces| Box::new(vpl_gpu::GpuRadiosity::new(g.clone(), vpl_pathtrace::PathRadiosity { paths, max_bounces })));
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
@@ -140,12 +142,12 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
     let mut md = String::from("# GPU backend: milliseconds per kernel and per indirect frame\n\n");
     let _ = writeln!(
         md,
-        "Adapter: **{adapter}**. Medians over {frames} frames after a warm-up frame; SMC sampling on the CPU ({threads} threads) with its rays (camera points, candidates, indirect visibility) cast on the GPU; \
+        "Adapter: **{adapter}**. Medians over {frames} frames after a warm-up frame; SMC sampling with its rays (camera points, candidates, indirect visibility) and radiosity estimates on the GPU, the rest (kNN, bookkeeping) on the CPU ({threads} threads); \
          128² paraboloid shadow maps of the moved VPLs by ray casting; 4×4 interleaved shading with the clamp; the cross-bilateral \
          filter. Each step is waited for, so the columns add up: *kernels* = G-buffer + shadow maps + gather + filter, *frame* = \
          everything including sampling, uploads and read-backs.\n"
     );
-    md.push_str("| scene | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling (CPU) | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
+    md.push_str("| scene | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
     md.push_str("| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
     for r in rows {
         let _ = writeln!(
@@ -171,7 +173,7 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
             r.all_maps_count
         );
     }
-    md.push_str("\nSMC sampling by step (ms; rays on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL) | kNN | total |\n| --- | ---: | ---: | ---: | ---: |\n");
+    md.push_str("\nSMC sampling by step (ms; rays and radiosity on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL, GPU) | kNN (CPU) | total |\n| --- | ---: | ---: | ---: | ---: |\n");
     for r in rows {
         let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
     }

@@ -99,14 +99,19 @@ impl GBufferStage {
         None
     }
 
-    /// The ray caster samplers should batch their rays through on this
-    /// backend (`None`: the CPU BVH).
-    pub fn ray_caster(&self) -> Option<std::sync::Arc<dyn vpl_core::RayCaster>> {
+    /// Gives `sampler` this backend's ray caster and radiosity estimator
+    /// (on the GPU backend: `GpuRays` and `GpuRadiosity`; on the CPU,
+    /// nothing changes).
+    pub fn equip(&self, sampler: &mut dyn VplSampler) {
         #[cfg(feature = "gpu")]
         if let Some(g) = &self.gpu {
-            return Some(std::sync::Arc::new(vpl_gpu::GpuRays::new(g.clone())));
+            sampler.set_ray_caster(std::sync::Arc::new(vpl_gpu::GpuRays::new(g.clone())));
+            let g = g.clone();
+            sampler.set_radiosity_estimator(&move |paths, max_bounces| {
+                Box::new(vpl_gpu::GpuRadiosity::new(g.clone(), vpl_pathtrace::PathRadiosity { paths, max_bounces }))
+            });
         }
-        None
+        let _ = sampler;
     }
 }
 
@@ -203,9 +208,7 @@ impl Pipeline {
         }
         let mut sampler = vpl_sampling::build(&spec.sampler, &spec.config).map_err(|e| e.to_string())?;
         let Stages { gbuffer, visibility, shader } = Stages::new(spec.backend, spec.visibility, spec.shading, spec.clamp, spec.seed, spec.config.vpls)?;
-        if let Some(rays) = gbuffer.ray_caster() {
-            sampler.set_ray_caster(rays);
-        }
+        gbuffer.equip(sampler.as_mut());
         Ok(Pipeline { spec, sampler, gbuffer, visibility, shader, previous: None })
     }
 

@@ -87,9 +87,7 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let Stages { gbuffer: gstage, visibility: mut sm, mut shader } =
         Stages::new(backend, VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), ShadingSpec::Interleaved { filter: true }, Some(clamp), 0, vpls)?;
-    if let Some(rays) = gstage.ray_caster() {
-        smc.set_ray_caster(rays);
-    }
+    gstage.equip(&mut smc);
     let mut rows: Vec<[f64; 9]> = Vec::new();
     for k in 0..=frames {
         let f = (start + k).min(count - 1);

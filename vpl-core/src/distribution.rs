@@ -46,6 +46,17 @@ impl Distribution1D {
         self.total
     }
 
+    /// The cumulative distribution (last entry 1), for kernels that sample
+    /// it elsewhere the way [`Distribution1D::sample`] does.
+    pub fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
+    /// The probabilities of all entries.
+    pub fn pmfs(&self) -> &[f32] {
+        &self.pmf
+    }
+
     /// Probability of entry `i`.
     #[inline]
     pub fn pmf(&self, i: usize) -> f32 {

@@ -67,6 +67,22 @@ pub fn stream(seed: u64, frame: u64, purpose: Purpose, index: u64) -> RngStream 
     RngStream { pcg: Pcg32::new(state, sequence) }
 }
 
+/// The PCG32 (XSH RR 64/32) state and increment of [`stream`]`(seed, frame,
+/// purpose, index)` before its first draw, for kernels that run the same
+/// stream elsewhere (a GPU): draw k outputs XSH RR of the state, then the
+/// state becomes state · 6364136223846793005 + increment (mod 2⁶⁴).
+pub fn stream_state(seed: u64, frame: u64, purpose: Purpose, index: u64) -> (u64, u64) {
+    let k = mix64(mix64(mix64(seed) ^ frame) ^ purpose.0.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    let state = mix64(k ^ index);
+    let sequence = mix64(k.rotate_left(17) ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    // As rand_pcg's Pcg32::new: an odd increment, one step away from the seed.
+    let increment = (sequence << 1) | 1;
+    (state.wrapping_add(increment).wrapping_mul(PCG_MULTIPLIER).wrapping_add(increment), increment)
+}
+
+/// The LCG multiplier of PCG32.
+pub const PCG_MULTIPLIER: u64 = 6_364_136_223_846_793_005;
+
 /// A PCG32 stream with the few draws a renderer needs.
 #[derive(Clone, Debug)]
 pub struct RngStream {
@@ -106,6 +122,20 @@ impl RngStream {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn stream_state_runs_the_same_stream() {
+        for (seed, index) in [(0u64, 0u64), (7, 3), (u64::MAX, 1 << 40)] {
+            let (mut state, inc) = super::stream_state(seed, 5, Purpose::RADIOSITY, index);
+            let mut rng = super::stream(seed, 5, Purpose::RADIOSITY, index);
+            for _ in 0..20 {
+                let rot = (state >> 59) as u32;
+                let xsh = (((state >> 18) ^ state) >> 27) as u32;
+                assert_eq!(xsh.rotate_right(rot), rng.next_u32());
+                state = state.wrapping_mul(super::PCG_MULTIPLIER).wrapping_add(inc);
+            }
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -54,6 +54,11 @@ pub trait VplSampler: Send {
     /// For samplers that batch their rays (SMC): cast them with `rays` from
     /// now on (a GPU twin of the BVH, say). Others ignore it.
     fn set_ray_caster(&mut self, _rays: std::sync::Arc<dyn RayCaster>) {}
+    /// For samplers that estimate radiosity (SMC): estimate it from now on
+    /// with `make(paths, bounces)`, given the sampler's own paths per
+    /// estimate and bounces (a GPU twin of the path tracer, say). Others
+    /// ignore it.
+    fn set_radiosity_estimator(&mut self, _make: &dyn Fn(u32, u32) -> Box<dyn RadiosityEstimator + Send + Sync>) {}
 }
 
 /// A source of VPLs from light paths whose number is chosen per call, each

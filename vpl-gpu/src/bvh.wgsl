@@ -9,7 +9,7 @@
 //   vpl_core::bvh::prepared_rows (Baldwin & Weber 2016).
 // bvh_order: scene triangle of each BVH primitive.
 // tri_info: four vec4 per scene triangle: [p0, material], [e1, normals],
-//   [e2, -], [ng, -] (integers bit-cast; normals = 0xffffffff when flat).
+//   [e2, area], [ng, -] (integers bit-cast; normals = 0xffffffff when flat).
 // tri_normals: three vec4 per shading-normal record.
 // materials: two vec4 per material: [albedo, -], [emission, -].
 

@@ -12,6 +12,7 @@
 //! | [`GpuRayTraced`]: shadow rays in the shading kernel | `vpl_visibility::RayTraced` | `VplVisibility` |
 //! | [`GpuInterleavedShader`]: 4×4 interleaved (or exhaustive) gathering, clamp, filter, albedo | `InterleavedShader`, `ExhaustiveShader` | `IndirectShader` |
 //! | [`GpuCrossBilateral`] | `vpl_shading::CrossBilateral` | `apply` |
+//! | [`GpuRadiosity`]: path-traced L(y), NEE + MIS, the CPU's PCG32 streams | `vpl_pathtrace::PathRadiosity` | `RadiosityEstimator` |
 //!
 //! The stages of one frame share a [`Gpu`] (the device, the scene upload and
 //! the G-buffer left on the device). The kernels do the CPU twins'
@@ -45,6 +46,7 @@ mod filter;
 mod gbuffer;
 mod interleaved;
 mod kernel;
+mod radiosity;
 mod raycast;
 mod raytraced;
 mod scene;
@@ -55,6 +57,7 @@ pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use interleaved::{GpuInterleavedShader, GpuShadeTimings};
+pub use radiosity::GpuRadiosity;
 pub use raycast::{GpuRayCaster, GpuRays};
 pub use raytraced::GpuRayTraced;
 pub use scene::GpuScene;

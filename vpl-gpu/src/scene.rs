@@ -89,7 +89,7 @@ impl GpuScene {
                 [
                     t.p0.extend(f32::from_bits(t.material)),
                     t.e1.extend(f32::from_bits(t.normals)),
-                    t.e2.extend(0.0),
+                    t.e2.extend(t.area),
                     t.ng.extend(0.0),
                 ]
             })

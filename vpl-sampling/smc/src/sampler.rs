@@ -481,6 +481,12 @@ impl VplSampler for SmcSampler {
         self.rays = rays;
     }
 
+    /// The estimator of every radiosity from now on: `make(radiosity_paths,
+    /// radiosity_bounces)`.
+    fn set_radiosity_estimator(&mut self, make: &dyn Fn(u32, u32) -> Estimator) {
+        self.estimator = make(self.config.radiosity_paths, self.config.radiosity_bounces);
+    }
+
     fn report(&self) -> String {
         let s = self.stats;
         let t = self.timings;

@@ -1,0 +1,363 @@
+// Radiosity estimates L(y) of surface points by path tracing with next-event
+// estimation and MIS, twin of vpl_pathtrace::PathRadiosity (the walk of
+// PathTracer::reflected, min_k = 1, max_k = 1 + max_bounces, Russian
+// roulette from rr_depth vertices): one invocation a (point, path), the
+// same PCG32 streams as the CPU (initial states computed on the host).
+//
+// jobs: three vec4 per point: [p, material], [n, two flags], [ng, -].
+// rng: per (point, path) the PCG32 state (lo, hi) and increment (lo, hi).
+// lights: four vec4 per light: [type (0 area, 1 point, 2 spot, 3 sun),
+//   triangle, spot cos_total, -], [position or direction, -],
+//   [radiance / intensity / irradiance, -], [spot direction, cos_falloff_start].
+// light_cdf, light_pmf: the power distribution (vpl_core Distribution1D).
+// tri_light: the light of each emissive triangle, NONE elsewhere.
+
+struct Params {
+    jobs: u32,
+    paths: u32,
+    max_k: u32,
+    rr_depth: u32,
+    lights: u32,
+    two_sided: u32,
+    eps: f32,
+    row: u32,
+}
+
+@group(1) @binding(0) var<uniform> params: Params;
+@group(1) @binding(1) var<storage, read> jobs: array<vec4<f32>>;
+@group(1) @binding(2) var<storage, read> rng_init: array<vec4<u32>>;
+@group(1) @binding(3) var<storage, read> lights: array<vec4<f32>>;
+@group(1) @binding(4) var<storage, read> light_cdf: array<f32>;
+@group(1) @binding(5) var<storage, read> light_pmf: array<f32>;
+@group(1) @binding(6) var<storage, read> tri_light: array<u32>;
+@group(1) @binding(7) var<storage, read_write> out_l: array<vec4<f32>>;
+
+const FRAC_1_PI: f32 = 0.31830987;
+const FRAC_PI_4: f32 = 0.7853982;
+
+// ---- PCG32 on 32-bit words ----
+
+// The full 64-bit product of two 32-bit words as (lo, hi).
+fn mul_wide(a: u32, b: u32) -> vec2<u32> {
+    let a0 = a & 0xffffu;
+    let a1 = a >> 16u;
+    let b0 = b & 0xffffu;
+    let b1 = b >> 16u;
+    let p00 = a0 * b0;
+    let p01 = a0 * b1;
+    let p10 = a1 * b0;
+    let p11 = a1 * b1;
+    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
+    return vec2<u32>((p00 & 0xffffu) | (mid << 16u), p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u));
+}
+
+// a * b + c mod 2^64, each (lo, hi).
+fn mul_add64(a: vec2<u32>, b: vec2<u32>, c: vec2<u32>) -> vec2<u32> {
+    let p = mul_wide(a.x, b.x);
+    let hi = p.y + a.x * b.y + a.y * b.x;
+    let lo = p.x + c.x;
+    let carry = select(0u, 1u, lo < p.x);
+    return vec2<u32>(lo, hi + c.y + carry);
+}
+
+var<private> rng_state: vec2<u32>;
+var<private> rng_inc: vec2<u32>;
+
+fn next_u32() -> u32 {
+    let s = rng_state;
+    // 6364136223846793005 = 0x5851F42D_4C957F2D
+    rng_state = mul_add64(s, vec2<u32>(0x4C957F2Du, 0x5851F42Du), rng_inc);
+    let rot = s.y >> 27u;
+    // ((s >> 18) ^ s) >> 27, low 32 bits
+    let t_lo = ((s.x >> 18u) | (s.y << 14u)) ^ s.x;
+    let t_hi = (s.y >> 18u) ^ s.y;
+    let xsh = (t_lo >> 27u) | (t_hi << 5u);
+    return (xsh >> rot) | (xsh << ((32u - rot) & 31u));
+}
+
+fn next_f32() -> f32 {
+    return f32(next_u32() >> 8u) * (1.0 / 16777216.0);
+}
+
+// ---- sampling (vpl_core::sampling) ----
+
+// (cos x, sin x) for |x| <= pi/4 by Taylor polynomials (errors below
+// 2e-9): the shading language's cos and sin may be off by 2^-11 (Vulkan's
+// bound), enough to move a long ray across an edge.
+fn cos_sin(x: f32) -> vec2<f32> {
+    let x2 = x * x;
+    let c = 1.0 + x2 * (-1.0 / 2.0 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    let s = x * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0)))));
+    return vec2<f32>(c, s);
+}
+
+// Shirley-Chiu concentric mapping (vpl_core::sampling::concentric_disk);
+// cos(pi/2 - t) = sin t keeps every angle within pi/4.
+fn concentric_disk(u: f32, v: f32) -> vec2<f32> {
+    let a = 2.0 * u - 1.0;
+    let b = 2.0 * v - 1.0;
+    if (a == 0.0 && b == 0.0) { return vec2<f32>(0.0); }
+    if (abs(a) > abs(b)) {
+        let cs = cos_sin(FRAC_PI_4 * (b / a));
+        return vec2<f32>(a * cs.x, a * cs.y);
+    }
+    let cs = cos_sin(FRAC_PI_4 * (a / b));
+    return vec2<f32>(b * cs.y, b * cs.x);
+}
+
+fn cosine_hemisphere(u: f32, v: f32) -> vec3<f32> {
+    let d = concentric_disk(u, v);
+    return vec3<f32>(d.x, d.y, sqrt(max(1.0 - d.x * d.x - d.y * d.y, 0.0)));
+}
+
+// vpl_core::LocalFrame::from_normal(n).to_world(v)
+fn to_world(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    // copysign(1, n.z): -0.0 counts as negative, as on the CPU.
+    let sgn = select(1.0, -1.0, (bitcast<u32>(n.z) & 0x80000000u) != 0u);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    let s = vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    let t = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    return s * v.x + t * v.y + n * v.z;
+}
+
+fn power_heuristic(pa: f32, pb: f32) -> f32 {
+    let a = pa * pa;
+    let b = pb * pb;
+    if (a + b == 0.0) { return 0.0; }
+    return a / (a + b);
+}
+
+// ---- lights (vpl_core::Scene::sample_light) ----
+
+struct LightSample {
+    ok: bool,
+    wi: vec3<f32>,
+    dist: f32,
+    li: vec3<f32>,
+    pdf: f32,
+    delta: bool,
+    p_sel: f32,
+}
+
+fn spot_falloff(cos_theta: f32, start: f32, total: f32) -> f32 {
+    if (cos_theta >= start) { return 1.0; }
+    if (cos_theta <= total) { return 0.0; }
+    let t = clamp((cos_theta - total) / (start - total), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+fn sample_light(x: vec3<f32>, u_sel: f32, u0: f32, u1: f32) -> LightSample {
+    var ls: LightSample;
+    ls.ok = false;
+    let n = params.lights;
+    if (n == 0u) { return ls; }
+    // partition_point(c <= u), then skip zero-probability entries.
+    var lo = 0u;
+    var hi = n;
+    loop {
+        if (lo >= hi) { break; }
+        let mid = (lo + hi) / 2u;
+        if (light_cdf[mid] <= u_sel) { lo = mid + 1u; } else { hi = mid; }
+    }
+    var i = min(lo, n - 1u);
+    loop {
+        if (!(light_pmf[i] == 0.0 && i + 1u < n)) { break; }
+        i = i + 1u;
+    }
+    ls.p_sel = light_pmf[i];
+    let h = lights[4u * i];
+    let kind = bitcast<u32>(h.x);
+    if (kind == 0u) {
+        // Area: a uniform point on the emissive triangle.
+        let tri = bitcast<u32>(h.y);
+        let p0 = tri_info[4u * tri].xyz;
+        let e1 = tri_info[4u * tri + 1u].xyz;
+        let e2 = tri_info[4u * tri + 2u];
+        let ng = tri_info[4u * tri + 3u].xyz;
+        let su = sqrt(u0);
+        let b1 = 1.0 - su;
+        let b2 = u1 * su;
+        let y = p0 + e1 * b1 + e2.xyz * b2;
+        let d = y - x;
+        let dist2 = dot(d, d);
+        if (dist2 <= 0.0) { return ls; }
+        let dist = sqrt(dist2);
+        let wi = d / dist;
+        let cos_l = -dot(wi, ng);
+        if (cos_l <= 0.0) { return ls; }
+        ls.ok = true;
+        ls.wi = wi;
+        ls.dist = dist;
+        ls.li = lights[4u * i + 2u].xyz;
+        ls.pdf = dist2 / (cos_l * e2.w);
+        ls.delta = false;
+        return ls;
+    }
+    if (kind == 3u) {
+        // Directional (sun).
+        ls.ok = true;
+        ls.wi = -lights[4u * i + 1u].xyz;
+        ls.dist = NO_HIT;
+        ls.li = lights[4u * i + 2u].xyz;
+        ls.pdf = 1.0;
+        ls.delta = true;
+        return ls;
+    }
+    // Point (1) and spot (2).
+    let d = lights[4u * i + 1u].xyz - x;
+    let dist2 = dot(d, d);
+    if (dist2 <= 0.0) { return ls; }
+    let dist = sqrt(dist2);
+    let wi = d / dist;
+    var f = 1.0;
+    if (kind == 2u) {
+        let sp = lights[4u * i + 3u];
+        f = spot_falloff(-dot(wi, sp.xyz), sp.w, h.z);
+        if (f <= 0.0) { return ls; }
+    }
+    ls.ok = true;
+    ls.wi = wi;
+    ls.dist = dist;
+    ls.li = lights[4u * i + 2u].xyz * (f / dist2);
+    ls.pdf = 1.0;
+    ls.delta = true;
+    return ls;
+}
+
+// Scene::light_unoccluded: from x stepped off along ng toward the sample.
+fn light_unoccluded(x: vec3<f32>, ng: vec3<f32>, ls: LightSample) -> bool {
+    let o = x + ng * params.eps;
+    if (ls.dist < NO_HIT) {
+        let b = x + ls.wi * ls.dist;
+        let d = b - o;
+        let len = length(d);
+        if (len <= 0.0) { return true; }
+        return !occluded(o, d / len, len * (1.0 - 1e-4) - params.eps);
+    }
+    return !occluded(o, ls.wi, NO_HIT);
+}
+
+// Scene::light_pdf of point y on triangle tri seen from x.
+fn light_pdf(x: vec3<f32>, y: vec3<f32>, tri: u32) -> f32 {
+    let li = tri_light[tri];
+    if (li == NONE) { return 0.0; }
+    let ng = tri_info[4u * tri + 3u].xyz;
+    let d = y - x;
+    let dist2 = dot(d, d);
+    let cos_l = -dot(d / sqrt(dist2), ng);
+    if (cos_l <= 0.0) { return 0.0; }
+    return light_pmf[li] * dist2 / (cos_l * tri_info[4u * tri + 2u].w);
+}
+
+fn barycentrics(p0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, p: vec3<f32>) -> vec2<f32> {
+    let v2 = p - p0;
+    let d00 = dot(e1, e1);
+    let d01 = dot(e1, e2);
+    let d11 = dot(e2, e2);
+    let d20 = dot(v2, e1);
+    let d21 = dot(v2, e2);
+    let denom = d00 * d11 - d01 * d01;
+    let b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
+    let b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
+    return vec2<f32>(b1, b2);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k_job = id.x + id.y * params.row;
+    if (k_job >= params.jobs * params.paths) { return; }
+    let job = k_job / params.paths;
+    let r = rng_init[k_job];
+    rng_state = r.xy;
+    rng_inc = r.zw;
+    let a = jobs[3u * job];
+    var p = a.xyz;
+    var material = bitcast<u32>(a.w);
+    var n = jobs[3u * job + 1u].xyz;
+    var ng = jobs[3u * job + 2u].xyz;
+    var wo = n;
+    var k = 0u;
+    var l = vec3<f32>(0.0);
+    var beta = vec3<f32>(1.0);
+    loop {
+        if (k + 1u > params.max_k) { break; }
+        if (dot(wo, ng) <= 0.0) {
+            if (params.two_sided == 0u) { break; }
+            ng = -ng;
+            n = -n;
+        }
+        let albedo = materials[2u * material].xyz;
+        if (max(max(albedo.x, albedo.y), albedo.z) <= 0.0) { break; }
+        let f = albedo * FRAC_1_PI;
+        let u_sel = next_f32();
+        let u_l0 = next_f32();
+        let u_l1 = next_f32();
+        let u_b0 = next_f32();
+        let u_b1 = next_f32();
+        let last = k + 1u == params.max_k;
+        // Next-event estimation (every path here has k + 1 >= min_k = 1).
+        let ls = sample_light(p, u_sel, u_l0, u_l1);
+        if (ls.ok) {
+            let cos_i = dot(n, ls.wi);
+            if (cos_i > 0.0 && dot(ls.wi, ng) > 0.0 && light_unoccluded(p, ng, ls)) {
+                if (ls.delta) {
+                    l = l + beta * f * ls.li * (cos_i / ls.p_sel);
+                } else {
+                    let pdf_light = ls.p_sel * ls.pdf;
+                    var w = 1.0;
+                    if (!last) { w = power_heuristic(pdf_light, cos_i * FRAC_1_PI); }
+                    l = l + beta * f * ls.li * (cos_i * w / pdf_light);
+                }
+            }
+        }
+        if (last) { break; }
+        let local = cosine_hemisphere(u_b0, u_b1);
+        let wi = to_world(n, local);
+        if (dot(wi, ng) <= 0.0) { break; }
+        let pdf_bsdf = local.z * FRAC_1_PI;
+        beta = beta * albedo;
+        let origin = p + ng * params.eps;
+        let h = closest_hit(origin, wi, NO_HIT);
+        if (h.prim == NONE) { break; }
+        k = k + 1u;
+        // The next vertex, as Scene::hit_at.
+        let tri = bvh_order[h.prim];
+        let t0 = tri_info[4u * tri];
+        let t1 = tri_info[4u * tri + 1u];
+        let e2 = tri_info[4u * tri + 2u].xyz;
+        let tng = tri_info[4u * tri + 3u].xyz;
+        let q = origin + wi * h.t;
+        var qn = tng;
+        let normals = bitcast<u32>(t1.w);
+        if (normals != NONE) {
+            let bc = barycentrics(t0.xyz, t1.xyz, e2, q);
+            let ns = (tri_normals[3u * normals] * (1.0 - bc.x - bc.y) + tri_normals[3u * normals + 1u] * bc.x + tri_normals[3u * normals + 2u] * bc.y).xyz;
+            let len2 = dot(ns, ns);
+            if (len2 > 0.0) {
+                qn = ns * inverseSqrt(len2);
+                if (dot(qn, tng) < 0.0) { qn = -qn; }
+            }
+        }
+        let q_material = bitcast<u32>(t0.w);
+        // Emission at the next vertex, weighted against NEE.
+        if (dot(-wi, tng) > 0.0) {
+            let le = materials[2u * q_material + 1u].xyz;
+            if (max(max(le.x, le.y), le.z) > 0.0) {
+                let w = power_heuristic(pdf_bsdf, light_pdf(p, q, tri));
+                l = l + beta * le * w;
+            }
+        }
+        if (k >= params.rr_depth) {
+            let qq = min(max(max(beta.x, beta.y), beta.z), 0.95);
+            if (next_f32() >= qq) { break; }
+            beta = beta / qq;
+        }
+        p = q;
+        n = qn;
+        ng = tng;
+        material = q_material;
+        wo = -wi;
+    }
+    out_l[k_job] = vec4<f32>(l, 0.0);
+}

@@ -65,9 +65,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
-    smc.set_ray_caster(std::sync::Arc::new(vpl_gpu::GpuRays::new(gpu.clone())));
-    let g = gpu.clone();
-    smc.set_radiosity_estimator(&move |paths, max_bounces| Box::new(vpl_gpu::GpuRadiosity::new(g.clone(), vpl_pathtrace::PathRadiosity { paths, max_bounces })));
+    crate::pipeline::GBufferStage::on(gpu.clone()).equip(&mut smc);
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);

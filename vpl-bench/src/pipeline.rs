@@ -35,8 +35,9 @@ pub enum Backend {
     #[default]
     Cpu,
     /// The wgpu kernels of `vpl-gpu` (feature `gpu`): G-buffer, shadow maps
-    /// or shadow rays, interleaved or exhaustive shading, filter. Sampling
-    /// and direct light stay on the CPU.
+    /// or shadow rays, interleaved or exhaustive shading, filter, and the
+    /// rays and radiosity estimates of samplers that take them (SMC). The
+    /// rest of sampling and the direct light stay on the CPU.
     Gpu,
 }
 
@@ -59,7 +60,7 @@ pub struct PipelineSpec {
     pub direct_samples: u32,
     /// Seed of all streams.
     pub seed: u64,
-    /// Where the stages run (and the rays of samplers that batch them).
+    /// Where the stages run.
     pub backend: Backend,
 }
 
@@ -76,6 +77,12 @@ impl GBufferStage {
             #[cfg(feature = "gpu")]
             gpu: None,
         }
+    }
+
+    /// The stage on `gpu`.
+    #[cfg(feature = "gpu")]
+    pub fn on(gpu: vpl_gpu::Gpu) -> GBufferStage {
+        GBufferStage { gpu: Some(gpu) }
     }
 
     /// The G-buffer of `scene` seen by `camera`.
@@ -179,7 +186,7 @@ impl Stages {
                 Box::new(s)
             }
         };
-        Ok(Stages { gbuffer: GBufferStage { gpu: Some(gpu) }, visibility, shader })
+        Ok(Stages { gbuffer: GBufferStage::on(gpu), visibility, shader })
     }
 }
 

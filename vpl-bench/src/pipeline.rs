@@ -106,6 +106,22 @@ impl GBufferStage {
         None
     }
 
+    /// Whether images of `size` fit the backend: on the GPU, each per-pixel
+    /// buffer (16 bytes a pixel) must fit the adapter's storage-buffer limit.
+    /// Says in one line what does not.
+    pub fn fits(&self, size: (u32, u32)) -> Result<(), String> {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            let bytes = size.0 as u64 * size.1 as u64 * 16;
+            let limit = g.ctx().device.limits().max_storage_buffer_binding_size as u64;
+            if bytes > limit {
+                return Err(format!("--backend gpu: {}x{} needs {} MiB per image buffer, over the adapter's {} MiB", size.0, size.1, bytes >> 20, limit >> 20));
+            }
+        }
+        let _ = size;
+        Ok(())
+    }
+
     /// Gives `sampler` this backend's ray caster and radiosity estimator
     /// (on the GPU backend: `GpuRays` and `GpuRadiosity`; on the CPU,
     /// nothing changes).

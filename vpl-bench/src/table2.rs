@@ -88,6 +88,7 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
     let Stages { gbuffer: gstage, visibility: mut sm, mut shader } =
         Stages::new(backend, VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), ShadingSpec::Interleaved { filter: true }, Some(clamp), 0, vpls)?;
     gstage.equip(&mut smc);
+    gstage.fits(size)?;
     let mut rows: Vec<[f64; 9]> = Vec::new();
     for k in 0..=frames {
         let f = (start + k).min(count - 1);

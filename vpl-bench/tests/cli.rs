@@ -237,3 +237,25 @@ fn gpu_backend_without_an_adapter_is_one_line() {
     assert!(lines[0].starts_with("vpl: error: ") && lines[0].contains("--backend gpu"), "{:?}", lines[0]);
     assert!(!out.exists());
 }
+
+/// `--backend gpu` with an image whose per-pixel buffers exceed any
+/// adapter's storage-buffer limit (16384² × 16 bytes = 4 GiB): one line and
+/// exit code 2 (or, without an adapter, the line that says so).
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_backend_with_too_large_an_image_is_one_line() {
+    let dir = scratch("too-large");
+    let out = dir.join("out.exr");
+    let o = vpl()
+        .env("XDG_RUNTIME_DIR", &dir)
+        .args(["render", "--scene", "cornell", "--method", "vpl", "--backend", "gpu", "--size", "16384x16384", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(o.status.code(), Some(2), "status {:?}, stderr {err}", o.status);
+    assert_eq!(lines.len(), 1, "expected one line, got {err:?}");
+    assert!(lines[0].starts_with("vpl: error: --backend gpu:"), "{:?}", lines[0]);
+    assert!(!out.exists());
+}

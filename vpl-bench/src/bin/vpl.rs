@@ -705,6 +705,7 @@ fn run(cli: Cli) -> Res<()> {
                 Some(Size(w, h)) => (w, h),
                 None => setup.camera.resolution,
             };
+            p.gbuffer.fits(res)?;
             let tracked: Vec<(u32, u32)> = if pixels.is_empty() { vpl_bench::sequence::default_tracked_pixels(res.0, res.1) } else { pixels.iter().map(|p| (p.0, p.1)).collect() };
             std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
             let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(range.len() as u64) };
@@ -1104,6 +1105,7 @@ fn render_vpl(
     let (sc, camera) = load_frame(scene, frame, size)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
     let mut p = vpl_bench::pipeline::Pipeline::new(pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?).map_err(|e| format!("--sampler {}: {e}", v.sampler))?;
+    p.gbuffer.fits(camera.resolution)?;
     if let (Some(a), false) = (p.adapter(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }

@@ -396,6 +396,7 @@ fn run_method(spec: &Table1Spec, row: &Row, run: &RowRun, method: &str, on_frame
     let setup = row.setup()?;
     let clamp = GeometryClamp::for_budget(row.vpls, setup.scene.surface_area());
     let mut pipeline = Pipeline::new(pipeline_spec(spec, method, row.vpls, clamp)).map_err(Table1Error::Invalid)?;
+    pipeline.gbuffer.fits(spec.size).map_err(Table1Error::Invalid)?;
     let mut k = 0u64;
     let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut pipeline, &row.pixels(spec.size), None, &mut |_, _| {
         k += 1;

@@ -117,6 +117,50 @@ fn trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
     return best;
 }
 
+// Barycentrics (b1, b2) of p in triangle (p0, e1, e2), as vpl_core's Scene.
+fn barycentrics(p0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, p: vec3<f32>) -> vec2<f32> {
+    let v2 = p - p0;
+    let d00 = dot(e1, e1);
+    let d01 = dot(e1, e2);
+    let d11 = dot(e2, e2);
+    let d20 = dot(v2, e1);
+    let d21 = dot(v2, e2);
+    let denom = d00 * d11 - d01 * d01;
+    let b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
+    let b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
+    return vec2<f32>(b1, b2);
+}
+
+// The surface at point p of the triangle of BVH primitive `prim`, as
+// vpl_core's Scene::hit_at: the geometric normal as stored, the shading
+// normal interpolated and turned to its side (ng where the triangle is flat
+// or the interpolation vanishes).
+struct Surface {
+    tri: u32,
+    material: u32,
+    n: vec3<f32>,
+    ng: vec3<f32>,
+}
+
+fn surface_at(prim: u32, p: vec3<f32>) -> Surface {
+    let tri = bvh_order[prim];
+    let a = tri_info[4u * tri];
+    let b = tri_info[4u * tri + 1u];
+    let ng = tri_info[4u * tri + 3u].xyz;
+    var n = ng;
+    let normals = bitcast<u32>(b.w);
+    if (normals != NONE) {
+        let bc = barycentrics(a.xyz, b.xyz, tri_info[4u * tri + 2u].xyz, p);
+        let ns = (tri_normals[3u * normals] * (1.0 - bc.x - bc.y) + tri_normals[3u * normals + 1u] * bc.x + tri_normals[3u * normals + 2u] * bc.y).xyz;
+        let len2 = dot(ns, ns);
+        if (len2 > 0.0) {
+            n = ns * inverseSqrt(len2);
+            if (dot(n, ng) < 0.0) { n = -n; }
+        }
+    }
+    return Surface(tri, bitcast<u32>(a.w), n, ng);
+}
+
 fn closest_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
     return trace(o, d, t_max, false);
 }

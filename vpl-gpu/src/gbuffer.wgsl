@@ -25,20 +25,6 @@ struct Camera {
 @group(1) @binding(4) var<storage, read_write> g_albedo: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> g_emitted: array<vec4<f32>>;
 
-// Barycentrics (b1, b2) of p in triangle (p0, e1, e2), as vpl_core's Scene.
-fn barycentrics(p0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, p: vec3<f32>) -> vec2<f32> {
-    let v2 = p - p0;
-    let d00 = dot(e1, e1);
-    let d01 = dot(e1, e2);
-    let d11 = dot(e2, e2);
-    let d20 = dot(v2, e1);
-    let d21 = dot(v2, e2);
-    let denom = d00 * d11 - d01 * d01;
-    let b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
-    let b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
-    return vec2<f32>(b1, b2);
-}
-
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x >= cam.width || id.y >= cam.height) { return; }
@@ -61,24 +47,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         g_emitted[i] = vec4<f32>(0.0);
         return;
     }
-    let tri = bvh_order[h.prim];
-    let a = tri_info[4u * tri];
-    let b = tri_info[4u * tri + 1u];
-    let e2 = tri_info[4u * tri + 2u].xyz;
-    var ng = tri_info[4u * tri + 3u].xyz;
-    let material = bitcast<u32>(a.w);
-    let normals = bitcast<u32>(b.w);
     let p = o + d * h.t;
-    var n = ng;
-    if (normals != NONE) {
-        let bc = barycentrics(a.xyz, b.xyz, e2, p);
-        let ns = (tri_normals[3u * normals] * (1.0 - bc.x - bc.y) + tri_normals[3u * normals + 1u] * bc.x + tri_normals[3u * normals + 2u] * bc.y).xyz;
-        let len2 = dot(ns, ns);
-        if (len2 > 0.0) {
-            n = ns * inverseSqrt(len2);
-            if (dot(n, ng) < 0.0) { n = -n; }
-        }
-    }
+    let sf = surface_at(h.prim, p);
+    let material = sf.material;
+    var n = sf.n;
+    var ng = sf.ng;
     let wo = -d;
     let front = dot(wo, ng) > 0.0;
     let albedo = materials[2u * material].xyz;

@@ -250,19 +250,6 @@ fn light_pdf(x: vec3<f32>, y: vec3<f32>, tri: u32) -> f32 {
     return light_pmf[li] * dist2 / (cos_l * tri_info[4u * tri + 2u].w);
 }
 
-fn barycentrics(p0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, p: vec3<f32>) -> vec2<f32> {
-    let v2 = p - p0;
-    let d00 = dot(e1, e1);
-    let d01 = dot(e1, e2);
-    let d11 = dot(e2, e2);
-    let d20 = dot(v2, e1);
-    let d21 = dot(v2, e2);
-    let denom = d00 * d11 - d01 * d01;
-    let b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
-    let b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
-    return vec2<f32>(b1, b2);
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let k_job = id.x + id.y * params.row;
@@ -322,24 +309,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         if (h.prim == NONE) { break; }
         k = k + 1u;
         // The next vertex, as Scene::hit_at.
-        let tri = bvh_order[h.prim];
-        let t0 = tri_info[4u * tri];
-        let t1 = tri_info[4u * tri + 1u];
-        let e2 = tri_info[4u * tri + 2u].xyz;
-        let tng = tri_info[4u * tri + 3u].xyz;
         let q = origin + wi * h.t;
-        var qn = tng;
-        let normals = bitcast<u32>(t1.w);
-        if (normals != NONE) {
-            let bc = barycentrics(t0.xyz, t1.xyz, e2, q);
-            let ns = (tri_normals[3u * normals] * (1.0 - bc.x - bc.y) + tri_normals[3u * normals + 1u] * bc.x + tri_normals[3u * normals + 2u] * bc.y).xyz;
-            let len2 = dot(ns, ns);
-            if (len2 > 0.0) {
-                qn = ns * inverseSqrt(len2);
-                if (dot(qn, tng) < 0.0) { qn = -qn; }
-            }
-        }
-        let q_material = bitcast<u32>(t0.w);
+        let sf = surface_at(h.prim, q);
+        let tri = sf.tri;
+        let tng = sf.ng;
+        let qn = sf.n;
+        let q_material = sf.material;
         // Emission at the next vertex, weighted against NEE.
         if (dot(-wi, tng) > 0.0) {
             let le = materials[2u * q_material + 1u].xyz;

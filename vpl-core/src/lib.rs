@@ -21,6 +21,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bsdf;
 pub mod builtin;
 pub mod bvh;
 pub mod camera;
@@ -46,6 +47,7 @@ pub mod scene;
 pub mod scene_file;
 pub mod sequence;
 pub mod setup;
+pub mod spectral;
 pub mod surface;
 pub mod traits;
 pub mod vpl;

@@ -7,8 +7,9 @@ use glam::Vec3;
 ///
 /// The VPL methods and the path tracer read `albedo` (Lambertian reflectance
 /// ρ) and `emission` (radiance Le emitted along the face normal, one-sided).
-/// `layered` carries the κ-layered model of the progressive renderer; until
-/// that renderer exists, a layered material is rendered by its diffuse part.
+/// `layered` carries the κ-layered model ([`crate::bsdf`]) that the path
+/// tracer and the progressive renderer follow; the VPL samplers and shaders
+/// of the real-time pipeline read the diffuse part (`albedo`) only.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name (from the MTL file or the built-in scene).
@@ -47,6 +48,21 @@ impl Layered {
     /// Whether the layer counts as diffuse (κ < 0.2).
     pub fn is_diffuse(&self) -> bool {
         self.kappa < 0.2
+    }
+
+    /// Whether the material disperses light (a transmissive layer with an
+    /// Abbe number): a path that meets it draws a wavelength (§6).
+    pub fn is_dispersive(&self) -> bool {
+        self.abbe > 0.0 && self.transmission > 0.0
+    }
+
+    /// Index of refraction at wavelength `lambda` (nm), or at the reference
+    /// wavelength for an RGB path (`None`).
+    pub fn ior_at(&self, lambda: Option<f32>) -> f32 {
+        match lambda {
+            Some(l) => crate::spectral::cauchy_ior(self.ior, self.abbe, l),
+            None => self.ior,
+        }
     }
 }
 

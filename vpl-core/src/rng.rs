@@ -47,6 +47,10 @@ impl Purpose {
     pub const BOOTSTRAP: Purpose = Purpose(16);
     /// Thinning a VPL set down to its budget (index 0).
     pub const THIN: Purpose = Purpose(17);
+    /// Caustic photons of the progressive renderer (index = photon number in the pass).
+    pub const PHOTON: Purpose = Purpose(18);
+    /// Stochastic VPL culling decisions (index = VPL number in the pass).
+    pub const CULL: Purpose = Purpose(19);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

@@ -3,7 +3,9 @@
 //! Depth and modes follow [`vpl_core::Mode`] (Mitsuba 3's convention:
 //! `max_depth` counts path segments).
 
+use vpl_core::bsdf::choose_layer;
 use vpl_core::clamp::{geometry_term, GeometryClamp};
+use vpl_core::spectral::sample_wavelength;
 use vpl_core::sampling::{cosine_hemisphere, power_heuristic};
 use vpl_core::{LocalFrame, Mode, Ray, RngStream, Scene, SurfacePoint};
 use vpl_core::glam::Vec3;
@@ -71,6 +73,10 @@ impl PathTracer {
             // Scatter at sp: it becomes scattering vertex k + 1.
             if k + 1 > max_k {
                 break;
+            }
+            if scene.material(&sp).layered.is_some() {
+                // From here on the path follows the κ-layered model (one layer per vertex).
+                return l + self.walk_layered(scene, sp, wo, k, min_k, max_k, clamp, beta, rng);
             }
             if wo.dot(sp.ng) <= 0.0 {
                 if !scene.two_sided {
@@ -143,6 +149,92 @@ impl PathTracer {
             }
             sp = next;
             wo = -wi;
+        }
+        l
+    }
+
+    /// [`PathTracer::walk`] for paths that meet κ-layered materials
+    /// ([`vpl_core::bsdf`]): at every vertex one layer is chosen from `wo`;
+    /// delta layers (mirrors, clear glass) are followed without next-event
+    /// estimation, the others get light samples with MIS against their own
+    /// lobe. A path that meets a dispersive surface draws a wavelength there
+    /// and keeps it (lazy spectral rendering, Dammertz et al. 2010, §6).
+    #[allow(clippy::too_many_arguments)]
+    fn walk_layered(&self, scene: &Scene, mut sp: SurfacePoint, mut wo: Vec3, mut k: u32, min_k: u32, max_k: u32, clamp: Option<GeometryClamp>, mut beta: Vec3, rng: &mut RngStream) -> Vec3 {
+        let eps = scene.epsilon();
+        let mut l = Vec3::ZERO;
+        let mut lambda: Option<f32> = None;
+        loop {
+            if k + 1 > max_k {
+                break;
+            }
+            let m = scene.material(&sp);
+            let transmissive = m.layered.as_ref().is_some_and(|x| x.transmission > 0.0);
+            if wo.dot(sp.ng) <= 0.0 && !scene.two_sided && !transmissive {
+                break;
+            }
+            if lambda.is_none() && m.layered.as_ref().is_some_and(|x| x.is_dispersive()) {
+                let w = sample_wavelength(rng.next_f32());
+                lambda = Some(w.lambda);
+                beta *= w.weight;
+            }
+            let eta = m.layered.as_ref().map_or(1.5, |x| x.ior_at(lambda));
+            let u_layer = rng.next_f32();
+            let (u_sel, u_l0, u_l1, u_b0, u_b1) = (rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32());
+            // Opaque surfaces of a two-sided scene reflect on the side they are seen from.
+            let at = if transmissive { sp } else { sp.facing(wo) };
+            let Some(layer) = choose_layer(m, &at, wo, eta, u_layer) else { break };
+            let last = k + 1 == max_k;
+            if !layer.is_delta() && k + 1 >= min_k {
+                if let Some((ls, p_sel)) = scene.sample_light(at.p, u_sel, (u_l0, u_l1)) {
+                    let f = layer.eval(&at, wo, ls.wi, eta);
+                    let cos = at.n.dot(ls.wi).abs();
+                    let origin_side = if ls.wi.dot(at.ng) >= 0.0 { at.ng } else { -at.ng };
+                    if f != Vec3::ZERO && scene.light_unoccluded(at.p, origin_side, &ls) {
+                        if ls.delta {
+                            l += beta * f * ls.li * (cos / p_sel);
+                        } else {
+                            let pdf_light = p_sel * ls.pdf;
+                            let w = if last { 1.0 } else { power_heuristic(pdf_light, layer.pdf(&at, wo, ls.wi, eta)) };
+                            l += beta * f * ls.li * (cos * w / pdf_light);
+                        }
+                    }
+                }
+            }
+            if last {
+                break;
+            }
+            let Some(s) = layer.sample(&at, wo, eta, (u_b0, u_b1)) else { break };
+            beta *= s.weight;
+            if beta.max_element() <= 0.0 {
+                break;
+            }
+            let origin = at.offset_toward(s.w, eps);
+            let Some(hit) = scene.intersect(&Ray::new(origin, s.w)) else { break };
+            k += 1;
+            let next = hit.point;
+            if k >= min_k {
+                let le = scene.emitted(&next, -s.w);
+                if le != Vec3::ZERO {
+                    let w = if s.delta { 1.0 } else { power_heuristic(s.pdf, scene.light_pdf(at.p, &next)) };
+                    l += beta * le * w;
+                }
+            }
+            if k == 1 {
+                if let Some(c) = clamp {
+                    let g = geometry_term(at.n.dot(s.w).abs(), next.n.dot(-s.w).abs(), hit.t * hit.t);
+                    beta *= c.factor(g);
+                }
+            }
+            if k >= self.rr_depth {
+                let q = beta.max_element().min(0.95);
+                if rng.next_f32() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            sp = next;
+            wo = -s.w;
         }
         l
     }

@@ -115,6 +115,63 @@ enum PathSamplingArg {
     Halton,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum CullingArg {
+    /// Unseen VPLs kept with probability --cull-accept, their power divided by it (unbiased).
+    Unbiased,
+    /// Unseen VPLs dropped.
+    Deterministic,
+    /// No culling.
+    Off,
+}
+
+/// Settings of `--method progressive` (Dammertz et al. 2010).
+#[derive(clap::Args)]
+struct ProgressiveArgs {
+    /// Passes to render (default 64 when --seconds is not given).
+    #[arg(long)]
+    passes: Option<u64>,
+    /// Time budget in seconds: stop after the pass that reaches it.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// VPL light paths per pass.
+    #[arg(long, default_value_t = 16)]
+    vpl_paths: usize,
+    /// Caustic photon paths per pass.
+    #[arg(long, default_value_t = 100_000)]
+    caustic_paths: usize,
+    /// Stochastic VPL culling against 256 Halton-chosen eye vertices.
+    #[arg(long, value_enum, default_value_t = CullingArg::Unbiased)]
+    culling: CullingArg,
+    /// Probability of keeping a VPL no representative sees (unbiased culling).
+    #[arg(long, default_value_t = 0.125)]
+    cull_accept: f32,
+    /// Aim caustic photons over the whole emission distribution instead of projection maps.
+    #[arg(long)]
+    no_projection_maps: bool,
+    /// Emit caustic photons from primary VPLs only (no indirect caustics EDS+D+L).
+    #[arg(long)]
+    primary_caustics_only: bool,
+    /// RGB only: no wavelengths at dispersive surfaces.
+    #[arg(long)]
+    no_spectral: bool,
+    /// Path classes to add: all, or a comma-separated list of direct, vpl, caustics, specular.
+    #[arg(long, default_value = "all")]
+    techniques: String,
+    /// Thin-lens radius (scene units; 0 = pinhole).
+    #[arg(long)]
+    lens_radius: Option<f32>,
+    /// Distance of the plane in focus (default: the distance to the camera target).
+    #[arg(long)]
+    focus_distance: Option<f32>,
+    /// Write an EXR snapshot every K passes into --snapshots.
+    #[arg(long)]
+    snapshot_every: Option<u64>,
+    /// Folder for the snapshots (pass_000016.exr, …).
+    #[arg(long)]
+    snapshots: Option<PathBuf>,
+}
+
 /// Settings of `--method vpl`.
 #[derive(clap::Args)]
 struct VplArgs {
@@ -242,6 +299,8 @@ enum Command {
         spp: u32,
         #[command(flatten)]
         v: VplArgs,
+        #[command(flatten)]
+        p: ProgressiveArgs,
         /// Output EXR; a PNG preview is written beside it.
         #[arg(long, default_value = "render.exr")]
         out: PathBuf,
@@ -598,9 +657,21 @@ fn emit(out: Option<&Path>, text: &str) -> Res<()> {
 
 fn run(cli: Cli) -> Res<()> {
     match cli.command {
-        Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, method, mode, spp, v, out, stderr, exposure, quiet } => {
+        Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, method, mode, spp, v, p, out, stderr, exposure, quiet } => {
             if method == Method::Progressive {
-                return Err("--method progressive is not available yet: this build renders with --method path or vpl".into());
+                if mode != ModeArg::Full {
+                    return Err("--mode: the progressive renderer renders full images (select path classes with --techniques)".into());
+                }
+                check_depth(max_depth, vpls)?;
+                if !(exposure.is_finite() && exposure > 0.0) {
+                    return Err("--exposure must be positive".into());
+                }
+                check_writable(&out)?;
+                if let Some(s) = &stderr {
+                    check_writable(s)?;
+                }
+                let pool = pool(threads)?;
+                return render_progressive(&scene, frame, size, seed, max_depth, clamp, vpls, &p, &out, stderr.as_deref(), exposure, quiet, &pool);
             }
             if spp == 0 {
                 return Err("--spp must be at least 1".into());
@@ -1181,4 +1252,130 @@ fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, thre
 #[cfg(not(feature = "gpu"))]
 fn bench_gpu(_: &[String], _: (u32, u32), _: usize, _: u32, _: Option<usize>, _: Option<&Path>) -> Res<()> {
     Err("bench-gpu: this build has no GPU backend (build vpl-bench with its default feature `gpu`)".into())
+}
+
+/// `vpl render --method progressive`.
+#[allow(clippy::too_many_arguments)]
+fn render_progressive(
+    scene: &str,
+    frame: u32,
+    size: Option<Size>,
+    seed: u64,
+    max_depth: u32,
+    clamp: Option<ClampArg>,
+    vpls: usize,
+    p: &ProgressiveArgs,
+    out: &Path,
+    stderr: Option<&Path>,
+    exposure: f32,
+    quiet: bool,
+    pool: &rayon::ThreadPool,
+) -> Res<()> {
+    use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
+    if p.passes == Some(0) {
+        return Err("--passes must be at least 1".into());
+    }
+    if let Some(t) = p.seconds {
+        if !(t.is_finite() && t > 0.0) {
+            return Err("--seconds must be positive".into());
+        }
+    }
+    if p.snapshot_every == Some(0) {
+        return Err("--snapshot-every must be at least 1".into());
+    }
+    if p.snapshot_every.is_some() != p.snapshots.is_some() {
+        return Err("--snapshot-every and --snapshots go together".into());
+    }
+    if let Some(d) = &p.snapshots {
+        if d.exists() && !d.is_dir() {
+            return Err(format!("--snapshots {} is not a directory", d.display()));
+        }
+    }
+    let techniques = Techniques::parse(&p.techniques).map_err(|e| format!("--techniques: {e}"))?;
+    let culling = match p.culling {
+        CullingArg::Unbiased => Culling::Unbiased { accept: p.cull_accept },
+        CullingArg::Deterministic => Culling::Deterministic,
+        CullingArg::Off => Culling::Off,
+    };
+    let (sc, mut camera) = load_frame(scene, frame, size)?;
+    if p.lens_radius.is_some() || p.focus_distance.is_some() {
+        let r = p.lens_radius.unwrap_or(camera.lens_radius);
+        let f = p.focus_distance.unwrap_or((camera.target - camera.origin).length());
+        if !(r.is_finite() && r >= 0.0) {
+            return Err("--lens-radius must be zero or positive".into());
+        }
+        if !(f.is_finite() && f > 0.0) {
+            return Err("--focus-distance must be positive".into());
+        }
+        camera.lens_radius = r;
+        camera.focus_distance = f;
+    }
+    let config = ProgressiveConfig {
+        max_depth,
+        vpl_paths: p.vpl_paths,
+        caustic_paths: p.caustic_paths,
+        culling,
+        clamp: clamp.unwrap_or(ClampArg::Off).resolve(vpls, sc.surface_area()),
+        projection_maps: !p.no_projection_maps,
+        indirect_caustics: !p.primary_caustics_only,
+        spectral: !p.no_spectral,
+        techniques,
+        seed,
+        ..ProgressiveConfig::default()
+    };
+    let mut r = Progressive::new(&sc, camera, config).map_err(|e| e.to_string())?;
+    let passes = p.passes.unwrap_or(if p.seconds.is_some() { u64::MAX } else { 64 });
+    if let Some(d) = &p.snapshots {
+        std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+    }
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else if passes == u64::MAX {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::new(passes)
+    };
+    let template = if passes == u64::MAX { "{spinner} {elapsed_precise} pass {pos} ({per_sec}) {msg}" } else { "{elapsed_precise} [{bar:40}] pass {pos}/{len} ({per_sec}) {msg}, eta {eta}" };
+    bar.set_style(ProgressStyle::with_template(template).unwrap().progress_chars("=> "));
+    let start = Instant::now();
+    let mut last = vpl_progressive::PassStats::default();
+    while r.passes() < passes {
+        last = pool.install(|| r.pass());
+        bar.set_message(format!("{} VPLs, {} photons", last.stored, last.photons));
+        bar.inc(1);
+        if let (Some(k), Some(d)) = (p.snapshot_every, &p.snapshots) {
+            if r.passes() % k == 0 {
+                r.image().write_exr(d.join(format!("pass_{:06}.exr", r.passes()))).map_err(|e| e.to_string())?;
+            }
+        }
+        if p.seconds.is_some_and(|t| start.elapsed().as_secs_f64() >= t) {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    let secs = start.elapsed().as_secs_f64();
+    let img = r.image();
+    img.write_exr(out).map_err(|e| e.to_string())?;
+    img.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    if let Some(s) = stderr {
+        r.stderr().write_exr(s).map_err(|e| e.to_string())?;
+    }
+    if !quiet {
+        let m = img.mean();
+        let (w, h) = r.camera().resolution;
+        eprintln!(
+            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} VPLs stored, {} photons, {:.0} ms), mean RGB {:.5} {:.5} {:.5} -> {}",
+            sc.name,
+            r.passes(),
+            r.passes() as f64 / secs,
+            last.stored,
+            last.photons,
+            last.total_ms,
+            m[0],
+            m[1],
+            m[2],
+            out.display()
+        );
+    }
+    Ok(())
 }

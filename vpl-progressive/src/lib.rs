@@ -1,0 +1,51 @@
+//! # vpl-progressive
+//!
+//! The progressive point-light renderer of Dammertz, Keller and Lensch,
+//! *Progressive Point-Light-Based Global Illumination* (CGF 2010). Each
+//! pass partitions path space by the κ-layered materials of
+//! [`vpl_core::bsdf`] (§4) and hands every class of light path to exactly
+//! one technique (§3):
+//!
+//! | paths | technique | module |
+//! | --- | --- | --- |
+//! | ES*L | eye paths that reach a light, added directly | [`eye`] |
+//! | EDL, EDD(S\|D)*L | VPLs from 16 light paths a pass, stochastically culled | [`light_paths`], [`gather`] |
+//! | EDS(S\|D)*L | caustic histograms: photons from the VPLs, aimed by projection maps, each falling into the one closest eye-vertex bin | [`histogram`], [`projection`] |
+//! | ES+D(S\|D)*L | specular gathering: the two above, at eye vertices reached through specular bounces | [`eye`], [`gather`], [`histogram`] |
+//!
+//! Passes are independent and are averaged in an accumulation buffer of
+//! constant size; eye paths start anew every pass, so anti-aliasing,
+//! thin-lens depth of field (the camera's lens) and glossy effects refine
+//! progressively. Paths that meet a dispersive material carry a wavelength
+//! from there on (lazy spectral rendering, §6).
+//!
+//! ```
+//! use vpl_core::SceneSetup;
+//! use vpl_progressive::{Progressive, ProgressiveConfig};
+//!
+//! let setup = SceneSetup::load("glass").unwrap();
+//! let camera = setup.camera.with_resolution((16, 12)).unwrap();
+//! let config = ProgressiveConfig { caustic_paths: 2000, ..Default::default() };
+//! let mut r = Progressive::new(&setup.scene, camera, config).unwrap();
+//! for _ in 0..2 {
+//!     r.pass();
+//! }
+//! assert_eq!(r.passes(), 2);
+//! assert!(r.image().mean()[0] > 0.0);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod config;
+pub mod error;
+pub mod eye;
+pub mod gather;
+pub mod histogram;
+pub mod light_paths;
+pub mod projection;
+pub mod renderer;
+pub mod vertex;
+
+pub use config::{Culling, ProgressiveConfig, Techniques};
+pub use error::ProgressiveError;
+pub use renderer::{specular_bounds, PassStats, Progressive};

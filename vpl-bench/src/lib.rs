@@ -26,6 +26,7 @@ pub mod gpu_bench;
 pub mod metrics;
 pub mod pipeline;
 pub mod plot;
+pub mod progressive;
 pub mod table1;
 pub mod table2;
 pub mod sequence;

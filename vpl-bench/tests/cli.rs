@@ -206,6 +206,9 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
         (vec!["table2", "--frames", "0", "--out", &out_s], "--frames must be at least 1"),
         (vec!["figures", "--only", "9", "--out", &out_s], "no figure 9"),
         (vec!["figures", "--scenes", "nowhere", "--out", &out_s], "nowhere"),
+        (vec!["progressive-figures", "--only", "9", "--out", &out_s], "no figure 9"),
+        (vec!["progressive-figures", "--fig8-scenes", "nowhere", "--out", &out_s], "nowhere"),
+        (vec!["progressive-figures", "--seconds", "0", "--out", &out_s], "--seconds must be positive"),
     ] {
         let o = vpl().args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
@@ -258,4 +261,60 @@ fn gpu_backend_with_too_large_an_image_is_one_line() {
     assert_eq!(lines.len(), 1, "expected one line, got {err:?}");
     assert!(lines[0].starts_with("vpl: error: --backend gpu:"), "{:?}", lines[0]);
     assert!(!out.exists());
+}
+
+/// `--method progressive`: bad settings give one line and exit code 2.
+#[test]
+fn progressive_refuses_bad_input_in_one_line() {
+    let dir = scratch("progressive-bad");
+    let snaps = dir.join("snaps").to_string_lossy().into_owned();
+    for (args, needle) in [
+        (vec!["--scene", "cornell", "--method", "progressive", "--passes", "0"], "--passes must be at least 1"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--seconds", "-1"], "--seconds must be positive"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--techniques", "photons"], "unknown technique 'photons'"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--cull-accept", "0"], "--cull-accept"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--lens-radius", "-0.1"], "--lens-radius"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--snapshot-every", "4"], "go together"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--snapshot-every", "0", "--snapshots", &snaps], "--snapshot-every must be at least 1"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--mode", "indirect"], "--techniques"),
+        (vec!["--scene", "cornell", "--method", "progressive", "--max-depth", "0"], "--max-depth"),
+    ] {
+        fails(&dir, &args, needle);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--method progressive` writes the image, its preview, the standard
+/// error and the snapshots, and says how many passes it rendered.
+#[test]
+fn progressive_renders_passes_and_snapshots() {
+    let dir = scratch("progressive");
+    let out = dir.join("g.exr");
+    let se = dir.join("g_se.exr");
+    let snaps = dir.join("snaps");
+    let o = vpl()
+        .args(["render", "--scene", "glass", "--method", "progressive", "--passes", "4", "--caustic-paths", "2000", "--size", "24x18", "--snapshot-every", "2", "--threads", "2", "--out"])
+        .arg(&out)
+        .arg("--stderr")
+        .arg(&se)
+        .arg("--snapshots")
+        .arg(&snaps)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("4 passes"), "{err}");
+    let img = vpl_core::Image::read_exr(&out).unwrap();
+    assert_eq!((img.width, img.height), (24, 18));
+    assert!(img.mean()[0] > 0.0);
+    assert!(dir.join("g.png").exists());
+    assert!(vpl_core::Image::read_exr(&se).unwrap().mean()[0] > 0.0);
+    for k in [2, 4] {
+        assert!(snaps.join(format!("pass_{k:06}.exr")).exists(), "snapshot {k}");
+    }
+    // A time budget alone: at least one pass.
+    let o = vpl().args(["render", "--scene", "cornell", "--method", "progressive", "--seconds", "0.2", "--size", "16x16", "--quiet", "--out"]).arg(dir.join("c.exr")).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(vpl_core::Image::read_exr(dir.join("c.exr")).unwrap().mean()[0] > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -9,7 +9,7 @@
 use crate::config::ProgressiveConfig;
 use crate::eye::EyeVertex;
 use crate::light_paths::{Emitter, PassVpl};
-use crate::projection::{ProjectionMap, SpecularBound};
+use crate::projection::{ProjectionMap, SpecularSet};
 use crate::vertex::{roulette, scatter};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -140,7 +140,7 @@ fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &m
 /// Traces `n` photons from VPL `v` (photon numbers `first..first + n` of
 /// the pass) and collects their deposits into `bins`.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_photons(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, bounds: &[SpecularBound], first: u64, n: u64, bins: &Bins) -> SourceResult {
+pub fn trace_photons(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, bounds: &SpecularSet, first: u64, n: u64, bins: &Bins) -> SourceResult {
     let mut out = SourceResult { coverage: 1.0, ..Default::default() };
     let map = if cfg.projection_maps {
         let Some(y) = v.position(scene) else {

@@ -26,6 +26,43 @@ pub struct SpecularBound {
     pub r: f32,
 }
 
+/// The specular triangles' bounds, grouped into clusters of consecutive
+/// triangles (neighbours on a mesh) with a bounding sphere each: a cluster
+/// seen under a small angle is splatted as one cone, a near one triangle by
+/// triangle. Both are conservative.
+#[derive(Clone, Debug, Default)]
+pub struct SpecularSet {
+    /// Every specular triangle's bound.
+    pub triangles: Vec<SpecularBound>,
+    /// (bound of the cluster, its triangles' range in `triangles`).
+    pub clusters: Vec<(SpecularBound, std::ops::Range<usize>)>,
+}
+
+/// Triangles per cluster.
+const CLUSTER: usize = 16;
+
+impl SpecularSet {
+    /// Clusters `triangles` in runs of consecutive bounds.
+    pub fn new(triangles: Vec<SpecularBound>) -> SpecularSet {
+        let clusters = (0..triangles.len())
+            .step_by(CLUSTER)
+            .map(|i| {
+                let range = i..(i + CLUSTER).min(triangles.len());
+                let ts = &triangles[range.clone()];
+                let c = ts.iter().map(|t| t.c).sum::<Vec3>() / ts.len() as f32;
+                let r = ts.iter().map(|t| (t.c - c).length() + t.r).fold(0.0f32, f32::max);
+                (SpecularBound { c, r }, range)
+            })
+            .collect();
+        SpecularSet { triangles, clusters }
+    }
+
+    /// Whether there is no specular triangle.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+}
+
 /// The marked cells of one VPL's projection map, ready for sampling.
 #[derive(Clone, Debug, Default)]
 pub struct ProjectionMap {
@@ -42,26 +79,33 @@ pub struct ProjectionMap {
 const MARGIN: f32 = 1e-3;
 
 impl ProjectionMap {
-    /// The map of a VPL at `y` for the specular bounds `bounds`. With a
+    /// The map of a VPL at `y` for the specular triangles of `set`. With a
     /// `hemisphere` normal, bounds wholly behind the plane through `y` are
     /// skipped (the VPL cannot emit there).
-    pub fn build(y: Vec3, hemisphere: Option<Vec3>, bounds: &[SpecularBound], size: (usize, usize)) -> ProjectionMap {
+    pub fn build(y: Vec3, hemisphere: Option<Vec3>, set: &SpecularSet, size: (usize, usize)) -> ProjectionMap {
         let (rows, cols) = size;
         let mut map = ProjectionMap { rows, cols, marked: vec![false; rows * cols], cells: Vec::new(), cdf: Vec::new() };
-        for b in bounds {
-            let d = b.c - y;
-            if let Some(n) = hemisphere {
-                if d.dot(n) < -b.r {
+        // A cluster narrower than this many cell heights is splatted whole.
+        let small = 2.0 * PI / rows as f32;
+        'clusters: for (cb, range) in &set.clusters {
+            if hemisphere.is_some_and(|n| (cb.c - y).dot(n) < -cb.r) {
+                continue;
+            }
+            let dist = (cb.c - y).length();
+            if dist > cb.r * 1.0001 + 1e-6 && (cb.r / dist).asin() < small {
+                if !map.splat(y, cb) {
+                    break;
+                }
+                continue;
+            }
+            for b in &set.triangles[range.clone()] {
+                if hemisphere.is_some_and(|n| (b.c - y).dot(n) < -b.r) {
                     continue;
                 }
+                if !map.splat(y, b) {
+                    break 'clusters;
+                }
             }
-            let dist = d.length();
-            if dist <= b.r * 1.0001 + 1e-6 {
-                map.marked.iter_mut().for_each(|m| *m = true);
-                break;
-            }
-            let alpha = (b.r / dist).asin() + MARGIN;
-            map.mark_cone(d / dist, alpha);
         }
         let dtheta = PI / rows as f32;
         let dphi = TAU / cols as f32;
@@ -77,6 +121,20 @@ impl ProjectionMap {
             }
         }
         map
+    }
+
+    /// Marks the cone of bound `b` seen from `y`; `false` when `y` lies
+    /// inside it and every cell has been marked.
+    fn splat(&mut self, y: Vec3, b: &SpecularBound) -> bool {
+        let d = b.c - y;
+        let dist = d.length();
+        if dist <= b.r * 1.0001 + 1e-6 {
+            self.marked.iter_mut().for_each(|m| *m = true);
+            return false;
+        }
+        let alpha = (b.r / dist).asin() + MARGIN;
+        self.mark_cone(d / dist, alpha);
+        true
     }
 
     /// Marks the cells a cone around unit `axis` with half-angle `alpha` touches.
@@ -174,7 +232,7 @@ mod tests {
             let c = uniform_sphere(rng.next_f32(), rng.next_f32()) * (0.3 + 3.0 * rng.next_f32());
             let r = 0.02 + 0.5 * rng.next_f32();
             let b = SpecularBound { c, r };
-            let map = ProjectionMap::build(Vec3::ZERO, None, &[b], (128, 256));
+            let map = ProjectionMap::build(Vec3::ZERO, None, &SpecularSet::new(vec![b]), (128, 256));
             for _ in 0..2000 {
                 // A direction toward a random point of the sphere.
                 let q = c + uniform_sphere(rng.next_f32(), rng.next_f32()) * (r * rng.next_f32().sqrt());
@@ -189,7 +247,7 @@ mod tests {
     #[test]
     fn samples_stay_in_marked_cells() {
         let b = [SpecularBound { c: Vec3::new(1.0, 2.0, 0.5), r: 0.4 }, SpecularBound { c: Vec3::new(0.0, 0.0, -2.0), r: 0.3 }];
-        let map = ProjectionMap::build(Vec3::ZERO, None, &b, (128, 256));
+        let map = ProjectionMap::build(Vec3::ZERO, None, &SpecularSet::new(b.to_vec()), (128, 256));
         let mut rng = stream(9, 0, Purpose::TEST, 1);
         for _ in 0..10_000 {
             // Away from cell borders, where rounding may name the neighbour.
@@ -206,7 +264,7 @@ mod tests {
 
     #[test]
     fn hemisphere_skips_bounds_behind() {
-        let b = [SpecularBound { c: Vec3::new(0.0, 0.0, -2.0), r: 0.3 }];
+        let b = SpecularSet::new(vec![SpecularBound { c: Vec3::new(0.0, 0.0, -2.0), r: 0.3 }]);
         assert!(ProjectionMap::build(Vec3::ZERO, Some(Vec3::Z), &b, (128, 256)).is_empty());
         assert!(!ProjectionMap::build(Vec3::ZERO, Some(-Vec3::Z), &b, (128, 256)).is_empty());
     }

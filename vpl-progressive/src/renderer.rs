@@ -6,7 +6,7 @@ use crate::eye::{pixel_angle, trace_eye, EyePath, EyeVertex};
 use crate::gather::{contribution, sees};
 use crate::histogram::{trace_photons, Bins, SourceResult};
 use crate::light_paths::{trace_light_path, Emitter, PassVpl};
-use crate::projection::SpecularBound;
+use crate::projection::{SpecularBound, SpecularSet};
 use rayon::prelude::*;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
@@ -51,7 +51,7 @@ pub struct Progressive<'s> {
     scene: &'s Scene,
     camera: Camera,
     config: ProgressiveConfig,
-    bounds: Vec<SpecularBound>,
+    bounds: SpecularSet,
     sum: Vec<[f64; 3]>,
     sum_sq: Vec<[f64; 3]>,
     passes: u64,
@@ -81,7 +81,7 @@ impl<'s> Progressive<'s> {
             return Err(ProgressiveError::NoLights(scene.name.clone()));
         }
         let n = camera.resolution.0 as usize * camera.resolution.1 as usize;
-        Ok(Progressive { scene, camera, config, bounds: specular_bounds(scene), sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], passes: 0 })
+        Ok(Progressive { scene, camera, config, bounds: SpecularSet::new(specular_bounds(scene)), sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], passes: 0 })
     }
 
     /// The settings.

@@ -2,7 +2,8 @@
 //!
 //! - `cargo xtask reproduce [--quick | --full] [--only LIST] [--scene S,..] [--methods M,..]
 //!   [--frames A..B] [--shard I/N]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
-//!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Georgiev's RR experiment,
+//!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Figs. 6-8 of the
+//!   progressive renderer (Dammertz et al. 2010, `results/progressive/`), Georgiev's RR experiment,
 //!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
 //!   and `results/README.md` linking all of it. `--shard I/N` runs shard I of Table 1's units
 //!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
@@ -21,7 +22,7 @@ use std::process::{Command, ExitCode};
 use std::time::Instant;
 
 const SCENES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
-const JOBS: [&str; 8] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "fig8", "fig10"];
+const JOBS: [&str; 9] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "fig8", "fig10", "progressive"];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -39,7 +40,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10] \
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
      [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR]>"
 }
@@ -108,6 +109,7 @@ struct Profile {
     georgiev_frames: u32,
     table2: (&'static str, u32),
     figures: &'static [&'static str],
+    progressive: &'static [&'static str],
 }
 
 const QUICK: Profile = Profile {
@@ -119,6 +121,10 @@ const QUICK: Profile = Profile {
     georgiev_frames: 8,
     table2: ("640x360", 10),
     figures: &["--scenes", "office", "--fig10-scenes", "atrium", "--spp", "256", "--fig10-spp", "1024", "--shadow-maps", "128,256", "--fig10-size", "160x120", "--fig10-warmup", "20"],
+    progressive: &[
+        "--fig7-size", "160x120", "--passes", "512", "--converged", "2048", "--reference-spp", "1024", "--fig8-scenes", "cornell,office,maze", "--fig8-size", "160x120",
+        "--seconds", "10",
+    ],
 };
 
 const FULL: Profile = Profile {
@@ -132,6 +138,10 @@ const FULL: Profile = Profile {
     figures: &[
         "--scenes", "office,atrium", "--fig10-scenes", "atrium,courtyard,office", "--spp", "32768", "--fig10-spp", "8192", "--shadow-maps", "128,256,512,1024", "--fig10-size", "320x240",
         "--fig10-warmup", "100",
+    ],
+    progressive: &[
+        "--fig7-size", "320x240", "--passes", "2048", "--converged", "11456", "--reference-spp", "16384", "--fig8-scenes", "cornell,office,maze,atrium,corner,courtyard",
+        "--fig8-size", "320x240", "--seconds", "180",
     ],
 };
 
@@ -178,6 +188,7 @@ Each section comes from the newest run of its job; the wall times below are of t
 - [Table 2](table2/table2.md): milliseconds per stage of an SMC frame\n\
 - [Figs. 8 and 9](figures/fig8.md): one frame by path tracing and by VPLs; shadow-map resolutions\n\
 - [Fig. 10](figures/fig10.md): error against the VPL budget\n\
+- [Progressive](progressive/progressive.md): Figs. 6-8 of Dammertz et al., error against passes and equal time against path tracing\n\
 - [Georgiev](georgiev/georgiev.md), [validation](validation/cornell_validation.md), path-traced references, the scene gallery\n\n";
 
 fn reproduce(args: &[String]) -> Result<(), String> {
@@ -350,6 +361,18 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         let title = if fig == "8" { "Figs. 8 and 9" } else { "Fig. 10" };
         let md = format!("## {title} (`figures/{name}.md`)\n\n{}\n", fix_links(&body.replace("## ", "### "), "figures/"));
         save_section(name, &md, Some(t.elapsed().as_secs_f64()))?;
+    }
+    if job("progressive") {
+        let t = Instant::now();
+        eprintln!("xtask: [progressive] Figs. 6-8 of Dammertz et al. 2010");
+        let dir = results.join("progressive");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root()).arg("progressive-figures").args(profile.progressive).arg("--out").arg(&dir);
+        run(c, "vpl progressive-figures")?;
+        let text = std::fs::read_to_string(dir.join("progressive.md")).map_err(|e| e.to_string())?;
+        let body = text.split_once("\n\n").map_or(text.as_str(), |(_, b)| b);
+        let md = format!("## Progressive point-light rendering, Figs. 6-8 of Dammertz et al. (`progressive/`)\n\n{}\n", fix_links(body, "progressive/"));
+        save_section("progressive", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     save_section(

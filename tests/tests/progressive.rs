@@ -203,9 +203,10 @@ fn glass_matches_the_path_tracer() {
     assert!(caustic_core.iter().filter(|m| **m).count() >= 4, "no caustic found");
     assert!(z(pm, pse, without, se) > 4.0 && pm.max_element() > without.max_element(), "the path tracer has no caustic where the histogram puts one");
     let ratio = m.element_sum() / pm.element_sum();
-    // What the bins add against what the path tracer has beyond the other techniques.
-    let bins = cm.element_sum() / (pm - without).element_sum();
-    eprintln!("glass, caustic core: progressive / path tracer = {ratio:.3}; histogram / (path tracer − other techniques) = {bins:.3}");
+    eprintln!("glass, caustic core: progressive / path tracer = {ratio:.3}");
+    // The bins' bias (fixed radius, closest bin only) stays within the noise here.
+    let zc = z(m, se, pm, pse);
+    assert!(zc <= 4.0, "caustic core: progressive differs from the path tracer by {zc:.1} standard errors");
 }
 
 /// Rendering each path class alone (same seed, so the same random

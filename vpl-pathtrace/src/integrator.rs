@@ -37,6 +37,22 @@ impl PathTracer {
         self.mode.k_range(self.max_depth)
     }
 
+    /// Russian roulette after `k` scattering vertices: from [`PathTracer::rr_depth`]
+    /// on, the path survives with probability min(max channel of β, 0.95)
+    /// and β is divided by it. Returns whether the path goes on.
+    #[inline]
+    fn survives(&self, k: u32, beta: &mut Vec3, rng: &mut RngStream) -> bool {
+        if k < self.rr_depth {
+            return true;
+        }
+        let q = beta.max_element().min(0.95);
+        if rng.next_f32() >= q {
+            return false;
+        }
+        *beta /= q;
+        true
+    }
+
     /// Radiance arriving along the camera ray `ray`.
     #[inline]
     pub fn li(&self, scene: &Scene, ray: Ray, rng: &mut RngStream) -> Vec3 {
@@ -140,12 +156,8 @@ impl PathTracer {
                     beta *= c.factor(g);
                 }
             }
-            if k >= self.rr_depth {
-                let q = beta.max_element().min(0.95);
-                if rng.next_f32() >= q {
-                    break;
-                }
-                beta /= q;
+            if !self.survives(k, &mut beta, rng) {
+                break;
             }
             sp = next;
             wo = -wi;
@@ -226,12 +238,8 @@ impl PathTracer {
                     beta *= c.factor(g);
                 }
             }
-            if k >= self.rr_depth {
-                let q = beta.max_element().min(0.95);
-                if rng.next_f32() >= q {
-                    break;
-                }
-                beta /= q;
+            if !self.survives(k, &mut beta, rng) {
+                break;
             }
             sp = next;
             wo = -s.w;

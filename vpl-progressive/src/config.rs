@@ -20,6 +20,17 @@ pub enum Culling {
     Deterministic,
 }
 
+/// Which bins a caustic photon falls into (§5.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinRule {
+    /// The closest bin only, if the photon lies within its radius (the
+    /// paper's rule: bins never overlap; biased dark where they would).
+    Closest,
+    /// Every bin whose radius reaches the photon (overlapping disks, each
+    /// bin an unclipped disk average).
+    AllWithin,
+}
+
 /// The disjoint path classes of §3 and which ones a render adds.
 ///
 /// Every path E(S|D)*L belongs to exactly one class; summing the images of
@@ -93,6 +104,8 @@ pub struct ProgressiveConfig {
     pub indirect_caustics: bool,
     /// Lazy spectral rendering of dispersive materials (§6).
     pub spectral: bool,
+    /// Which bins a caustic photon falls into (§5.3: the closest).
+    pub bins: BinRule,
     /// Which path classes the image gets.
     pub techniques: Techniques,
     /// Seed of every random stream.
@@ -113,6 +126,7 @@ impl Default for ProgressiveConfig {
             map_size: (128, 256),
             indirect_caustics: true,
             spectral: true,
+            bins: BinRule::Closest,
             techniques: Techniques::ALL,
             seed: 0,
         }

@@ -5,8 +5,16 @@
 //! closest bin (if it lies within that bin's radius), until a light-side
 //! diffuse choice ends them. A bin's pixel receives
 //! β_e · f_x(wo, w_photon) · Φ_photon / (π r²).
+//!
+//! The closest-bin rule ([`BinRule::Closest`], the paper's) keeps bins from
+//! overlapping, but a bin whose neighbour lies closer than 2r loses the part
+//! of its disk nearer to the neighbour while still dividing by πr²: caustics
+//! come out darker, by an amount that shrinks with the radius.
+//! [`BinRule::AllWithin`] gives a photon to every bin whose disk holds it,
+//! so each bin estimates the irradiance averaged over its whole disk (blur,
+//! no loss).
 
-use crate::config::ProgressiveConfig;
+use crate::config::{BinRule, ProgressiveConfig};
 use crate::eye::EyeVertex;
 use crate::light_paths::{Emitter, PassVpl};
 use crate::projection::{ProjectionMap, SpecularSet};
@@ -15,7 +23,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::f32::consts::{FRAC_1_PI, PI};
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::{cosine_hemisphere, uniform_sphere, uniform_triangle};
-use vpl_core::{stream, Light, LocalFrame, Purpose, Ray, Scene};
+use vpl_core::{stream, Light, LocalFrame, Purpose, Ray, Scene, SurfacePoint};
 
 /// Cosine below which a photon's surface and a bin's are different surfaces.
 const SAME_SURFACE_COS: f32 = 0.5;
@@ -24,6 +32,7 @@ const SAME_SURFACE_COS: f32 = 0.5;
 pub struct Bins<'a> {
     vertices: Vec<&'a EyeVertex>,
     tree: Option<ImmutableKdTree<f32, 3>>,
+    max_radius: f32,
 }
 
 impl<'a> Bins<'a> {
@@ -32,7 +41,8 @@ impl<'a> Bins<'a> {
         let points: Vec<[f32; 3]> = vertices.iter().map(|v| v.x.p.to_array()).collect();
         // Only fails on an empty slice.
         let tree = if points.is_empty() { None } else { ImmutableKdTree::new_from_slice(&points).ok() };
-        Bins { vertices, tree }
+        let max_radius = vertices.iter().map(|v| v.radius).fold(0.0f32, f32::max);
+        Bins { vertices, tree, max_radius }
     }
 
     /// Number of bins.
@@ -52,6 +62,19 @@ impl<'a> Bins<'a> {
         let n = tree.query(&p.to_array()).nearest_one::<SquaredEuclidean<f32>>().execute();
         let v = self.vertices[n.item as usize];
         (n.distance <= v.radius * v.radius).then_some(v)
+    }
+
+    /// Calls `f` with every bin whose radius reaches `p`.
+    #[inline]
+    pub fn each_within(&self, p: Vec3, mut f: impl FnMut(&'a EyeVertex)) {
+        let Some(tree) = self.tree.as_ref() else { return };
+        let r2 = self.max_radius * self.max_radius;
+        for n in tree.query(&p.to_array()).within::<SquaredEuclidean<f32>>(r2).unsorted().execute() {
+            let v = self.vertices[n.item as usize];
+            if n.distance <= v.radius * v.radius {
+                f(v);
+            }
+        }
     }
 }
 
@@ -184,7 +207,7 @@ fn trace_with(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, ma
             let Some(hit) = scene.intersect(&ray) else { break };
             let w_in = -ray.d;
             if m > 0 {
-                deposit(bins, cfg, hit.point.p, hit.point.ng, w_in, power, m + v.depth, &mut out.deposits);
+                deposit(bins, cfg, &hit.point, w_in, power, m + v.depth, &mut out.deposits);
             }
             // The photon may go on only if a bin can still take it: s = 0, one more specular vertex.
             if v.depth + m + 1 + 1 > max_vertices {
@@ -212,24 +235,35 @@ fn trace_with(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, ma
     out
 }
 
-/// Adds a photon arriving at `p` (surface normal `ng`) from `w_in` with
-/// `power`, after `vertices` light-side scattering vertices, to its closest bin.
-#[allow(clippy::too_many_arguments)]
+/// Adds a photon arriving at surface point `z` from `w_in` with `power`,
+/// after `vertices` light-side scattering vertices, to its bin(s). A bin
+/// takes only photons on its own surface: the same material and a normal
+/// within 60° (a photon inside a glass sphere, next to a floor bin at the
+/// point where the sphere rests, is not light on the floor).
 #[inline]
-fn deposit(bins: &Bins, cfg: &ProgressiveConfig, p: Vec3, ng: Vec3, w_in: Vec3, power: Vec3, vertices: u32, out: &mut Vec<(u32, Vec3)>) {
-    let Some(b) = bins.closest(p) else { return };
-    // Every eye vertex is a bin, so photons fall the same way whichever classes are rendered.
-    let class_on = if b.specular == 0 { cfg.techniques.caustics } else { cfg.techniques.specular_gathering };
-    if !class_on || b.specular + 1 + vertices > cfg.max_depth.saturating_sub(1) {
-        return;
+fn deposit(bins: &Bins, cfg: &ProgressiveConfig, z: &SurfacePoint, w_in: Vec3, power: Vec3, vertices: u32, out: &mut Vec<(u32, Vec3)>) {
+    let (p, ng) = (z.p, z.ng);
+    let mut add = |b: &EyeVertex| {
+        // Every eye vertex is a bin, so photons fall the same way whichever classes are rendered.
+        let class_on = if b.specular == 0 { cfg.techniques.caustics } else { cfg.techniques.specular_gathering };
+        if !class_on || b.specular + 1 + vertices > cfg.max_depth.saturating_sub(1) {
+            return;
+        }
+        if b.x.material != z.material || b.x.ng.dot(ng).abs() < SAME_SURFACE_COS {
+            return;
+        }
+        let f = b.layer.eval(&b.x, b.wo, w_in, b.eta);
+        if f == Vec3::ZERO {
+            return;
+        }
+        out.push((b.pixel, b.beta * f * power / (PI * b.radius * b.radius)));
+    };
+    match cfg.bins {
+        BinRule::Closest => {
+            if let Some(b) = bins.closest(p) {
+                add(b);
+            }
+        }
+        BinRule::AllWithin => bins.each_within(p, add),
     }
-    if b.x.ng.dot(ng).abs() < SAME_SURFACE_COS {
-        return;
-    }
-    let f = b.layer.eval(&b.x, b.wo, w_in, b.eta);
-    if f == Vec3::ZERO {
-        return;
-    }
-    let v = b.beta * f * power / (PI * b.radius * b.radius);
-    out.push((b.pixel, v));
 }

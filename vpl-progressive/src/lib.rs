@@ -46,6 +46,6 @@ pub mod projection;
 pub mod renderer;
 pub mod vertex;
 
-pub use config::{Culling, ProgressiveConfig, Techniques};
+pub use config::{BinRule, Culling, ProgressiveConfig, Techniques};
 pub use error::ProgressiveError;
 pub use renderer::{specular_bounds, PassStats, Progressive};

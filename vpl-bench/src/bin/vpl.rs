@@ -118,6 +118,14 @@ enum PathSamplingArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BinsArg {
+    /// The closest bin only (the paper's rule; darker where bins crowd).
+    Closest,
+    /// Every bin whose radius reaches the photon.
+    All,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum CullingArg {
     /// Unseen VPLs kept with probability --cull-accept, their power divided by it (unbiased).
     Unbiased,
@@ -154,6 +162,9 @@ struct ProgressiveArgs {
     /// Emit caustic photons from primary VPLs only (no indirect caustics EDS+D+L).
     #[arg(long)]
     primary_caustics_only: bool,
+    /// Which caustic bins a photon falls into.
+    #[arg(long, value_enum, default_value_t = BinsArg::Closest)]
+    bins: BinsArg,
     /// RGB only: no wavelengths at dispersive surfaces.
     #[arg(long)]
     no_spectral: bool,
@@ -530,7 +541,6 @@ enum Command {
         /// The run's output folder.
         dir: PathBuf,
     },
-    /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
     /// Figs. 6-8 of the progressive renderer (Dammertz et al. 2010): error against passes on a
     /// scene, and an equal-time comparison with path tracing on diffuse scenes.
     ProgressiveFigures {
@@ -583,6 +593,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
     ValidateCornell {
         /// Samples per pixel.
         #[arg(long, default_value_t = 1024)]
@@ -712,22 +723,10 @@ fn emit(out: Option<&Path>, text: &str) -> Res<()> {
 fn run(cli: Cli) -> Res<()> {
     match cli.command {
         Command::Render { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, method, mode, spp, v, p, out, stderr, exposure, quiet } => {
-            if method == Method::Progressive {
-                if mode != ModeArg::Full {
-                    return Err("--mode: the progressive renderer renders full images (select path classes with --techniques)".into());
-                }
-                check_depth(max_depth, vpls)?;
-                if !(exposure.is_finite() && exposure > 0.0) {
-                    return Err("--exposure must be positive".into());
-                }
-                check_writable(&out)?;
-                if let Some(s) = &stderr {
-                    check_writable(s)?;
-                }
-                let pool = pool(threads)?;
-                return render_progressive(&scene, frame, size, seed, max_depth, clamp, vpls, &p, &out, stderr.as_deref(), exposure, quiet, &pool);
+            if method == Method::Progressive && mode != ModeArg::Full {
+                return Err("--mode: the progressive renderer renders full images (select path classes with --techniques)".into());
             }
-            if spp == 0 {
+            if method != Method::Progressive && spp == 0 {
                 return Err("--spp must be at least 1".into());
             }
             check_depth(max_depth, vpls)?;
@@ -739,6 +738,9 @@ fn run(cli: Cli) -> Res<()> {
                 check_writable(s)?;
             }
             let pool = pool(threads)?;
+            if method == Method::Progressive {
+                return render_progressive(&scene, frame, size, seed, max_depth, clamp, vpls, &p, &out, stderr.as_deref(), exposure, quiet, &pool);
+            }
             if method == Method::Vpl {
                 if stderr.is_some() {
                     return Err("--stderr is for --method path: one VPL render has no per-pixel error estimate".into());
@@ -1433,6 +1435,10 @@ fn render_progressive(
         projection_maps: !p.no_projection_maps,
         indirect_caustics: !p.primary_caustics_only,
         spectral: !p.no_spectral,
+        bins: match p.bins {
+            BinsArg::Closest => vpl_progressive::BinRule::Closest,
+            BinsArg::All => vpl_progressive::BinRule::AllWithin,
+        },
         techniques,
         seed,
         ..ProgressiveConfig::default()
@@ -1478,12 +1484,15 @@ fn render_progressive(
         let m = img.mean();
         let (w, h) = r.camera().resolution;
         eprintln!(
-            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} VPLs stored, {} photons, {:.0} ms), mean RGB {:.5} {:.5} {:.5} -> {}",
+            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} of {} VPLs stored, {} photons of which {} caustic, map coverage {:.1} %, {:.0} ms), mean RGB {:.5} {:.5} {:.5} -> {}",
             sc.name,
             r.passes(),
             r.passes() as f64 / secs,
             last.stored,
+            last.vpls,
             last.photons,
+            last.caustic_photons,
+            100.0 * last.map_coverage,
             last.total_ms,
             m[0],
             m[1],

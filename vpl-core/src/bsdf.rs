@@ -51,7 +51,10 @@
 
 use crate::material::{Layered, Material};
 use crate::ray::LocalFrame;
+use crate::rng::RngStream;
 use crate::sampling::cosine_hemisphere;
+use crate::scene::Scene;
+use crate::spectral::sample_wavelength;
 use crate::surface::SurfacePoint;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -180,6 +183,45 @@ pub fn choose_layer(m: &Material, sp: &SurfacePoint, w: Vec3, eta: f32, u: f32) 
         Layer { kind: LayerKind::Base, kappa: 0.0, tint: m.albedo }
     };
     (layer.tint.max_element() > 0.0).then_some(layer)
+}
+
+/// How a path scatters at a surface point: the side, the layer and the index of refraction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scatter {
+    /// The point; opaque surfaces turned toward the known direction, transmissive ones as built.
+    pub at: SurfacePoint,
+    /// The chosen layer (one layer per sample).
+    pub layer: Layer,
+    /// Index of refraction at the path's wavelength.
+    pub eta: f32,
+}
+
+/// Chooses how a path that arrives at `sp` (the triangle's own normals)
+/// from direction `w` (away from the surface) scatters, for eye paths and
+/// light paths alike: with `spectral`, it first draws a wavelength if the
+/// surface disperses and the path has none yet (lazy spectral rendering,
+/// Dammertz et al. §6; `beta` takes the wavelength's weight), then a layer
+/// ([`choose_layer`]). Draws at most two numbers from `rng`, in that order.
+/// `None` where the path ends: an opaque surface of a one-sided scene seen
+/// from behind, or a black layer.
+#[inline]
+pub fn scatter(scene: &Scene, sp: SurfacePoint, w: Vec3, spectral: bool, lambda: &mut Option<f32>, beta: &mut Vec3, rng: &mut RngStream) -> Option<Scatter> {
+    let m = scene.material(&sp);
+    let layered = m.layered.as_ref();
+    let transmissive = layered.is_some_and(|l| l.transmission > 0.0);
+    if w.dot(sp.ng) <= 0.0 && !scene.two_sided && !transmissive {
+        return None;
+    }
+    if spectral && lambda.is_none() && layered.is_some_and(|l| l.is_dispersive()) {
+        let s = sample_wavelength(rng.next_f32());
+        *lambda = Some(s.lambda);
+        *beta *= s.weight;
+    }
+    let eta = layered.map_or(1.5, |l| l.ior_at(if spectral { *lambda } else { None }));
+    // Opaque surfaces of a two-sided scene reflect on the side they are seen from.
+    let at = if transmissive { sp } else { sp.facing(w) };
+    let layer = choose_layer(m, &at, w, eta, rng.next_f32())?;
+    Some(Scatter { at, layer, eta })
 }
 
 /// Normalised Blinn–Phong density (k + 1)/(2π) cos^k of a direction at

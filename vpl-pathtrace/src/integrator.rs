@@ -3,9 +3,8 @@
 //! Depth and modes follow [`vpl_core::Mode`] (Mitsuba 3's convention:
 //! `max_depth` counts path segments).
 
-use vpl_core::bsdf::choose_layer;
+use vpl_core::bsdf::scatter;
 use vpl_core::clamp::{geometry_term, GeometryClamp};
-use vpl_core::spectral::sample_wavelength;
 use vpl_core::sampling::{cosine_hemisphere, power_heuristic};
 use vpl_core::{LocalFrame, Mode, Ray, RngStream, Scene, SurfacePoint};
 use vpl_core::glam::Vec3;
@@ -180,22 +179,9 @@ impl PathTracer {
             if k + 1 > max_k {
                 break;
             }
-            let m = scene.material(&sp);
-            let transmissive = m.layered.as_ref().is_some_and(|x| x.transmission > 0.0);
-            if wo.dot(sp.ng) <= 0.0 && !scene.two_sided && !transmissive {
-                break;
-            }
-            if lambda.is_none() && m.layered.as_ref().is_some_and(|x| x.is_dispersive()) {
-                let w = sample_wavelength(rng.next_f32());
-                lambda = Some(w.lambda);
-                beta *= w.weight;
-            }
-            let eta = m.layered.as_ref().map_or(1.5, |x| x.ior_at(lambda));
-            let u_layer = rng.next_f32();
+            let Some(sc) = scatter(scene, sp, wo, true, &mut lambda, &mut beta, rng) else { break };
             let (u_sel, u_l0, u_l1, u_b0, u_b1) = (rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32());
-            // Opaque surfaces of a two-sided scene reflect on the side they are seen from.
-            let at = if transmissive { sp } else { sp.facing(wo) };
-            let Some(layer) = choose_layer(m, &at, wo, eta, u_layer) else { break };
+            let (at, layer, eta) = (sc.at, sc.layer, sc.eta);
             let last = k + 1 == max_k;
             if !layer.is_delta() && k + 1 >= min_k {
                 if let Some((ls, p_sel)) = scene.sample_light(at.p, u_sel, (u_l0, u_l1)) {

@@ -13,7 +13,8 @@
 //! the width at the diffuse vertex.
 
 use crate::config::ProgressiveConfig;
-use crate::vertex::{roulette, scatter};
+use crate::vertex::roulette;
+use vpl_core::bsdf::scatter;
 use vpl_core::bsdf::{Layer, LayerKind};
 use vpl_core::glam::Vec3;
 use vpl_core::{stream, Camera, Purpose, Ray, Scene, SurfacePoint};

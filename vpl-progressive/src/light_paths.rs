@@ -4,7 +4,8 @@
 //! a diffuse vertex.
 
 use crate::config::ProgressiveConfig;
-use crate::vertex::{roulette, scatter};
+use crate::vertex::roulette;
+use vpl_core::bsdf::scatter;
 use vpl_core::bsdf::Layer;
 use vpl_core::glam::Vec3;
 use vpl_core::{stream, Purpose, Ray, Scene, SurfacePoint};

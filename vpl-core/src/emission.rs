@@ -3,7 +3,7 @@
 
 use crate::light::Light;
 use crate::ray::{LocalFrame, Ray};
-use crate::sampling::{concentric_disk, cosine_hemisphere, uniform_sphere, uniform_triangle};
+use crate::sampling::{concentric_disk, cosine_hemisphere, uniform_sphere};
 use crate::scene::Scene;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -45,8 +45,7 @@ impl Scene {
         let (ray, beta) = match self.lights.get(i)? {
             Light::Area { triangle, radiance } => {
                 let t = &self.geometry.triangles[*triangle as usize];
-                let (b1, b2) = uniform_triangle(u_pos.0, u_pos.1);
-                let y = t.p0 + t.e1 * b1 + t.e2 * b2;
+                let y = t.sample_point(u_pos);
                 let d = LocalFrame::from_normal(t.ng).to_world(cosine_hemisphere(u_dir.0, u_dir.1));
                 // Le·cos / (1/A · cos/π) = π·A·Le.
                 (Ray::new(y + t.ng * self.epsilon(), d), *radiance * (PI * t.area))

@@ -31,6 +31,17 @@ pub struct TriangleData {
     pub normals: u32,
 }
 
+impl TriangleData {
+    /// The point a uniform sample `u` ∈ [0, 1)² maps to ([`uniform_triangle`]):
+    /// how light sampling, light emission and the progressive renderer's
+    /// primary VPLs place a point on an emitting triangle.
+    #[inline]
+    pub fn sample_point(&self, u: (f32, f32)) -> Vec3 {
+        let (b1, b2) = uniform_triangle(u.0, u.1);
+        self.p0 + self.e1 * b1 + self.e2 * b2
+    }
+}
+
 /// Geometry that does not change during a sequence: triangles, shading normals, BVH.
 #[derive(Debug)]
 pub struct Geometry {
@@ -369,8 +380,7 @@ impl Scene {
         match &self.lights[i] {
             Light::Area { triangle, radiance } => {
                 let t = &self.geometry.triangles[*triangle as usize];
-                let (b1, b2) = uniform_triangle(u.0, u.1);
-                let y = t.p0 + t.e1 * b1 + t.e2 * b2;
+                let y = t.sample_point(u);
                 let d = y - x;
                 let dist2 = d.length_squared();
                 if dist2 <= 0.0 {

@@ -23,7 +23,7 @@ use vpl_core::bsdf::scatter;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::f32::consts::{FRAC_1_PI, PI};
 use vpl_core::glam::Vec3;
-use vpl_core::sampling::{cosine_hemisphere, uniform_sphere, uniform_triangle};
+use vpl_core::sampling::{cosine_hemisphere, uniform_sphere};
 use vpl_core::{stream, Light, LocalFrame, Purpose, Ray, Scene, SurfacePoint};
 
 /// Cosine below which a photon's surface and a bin's are different surfaces.
@@ -114,8 +114,7 @@ fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &m
         Emitter::Light { light, u_pos, scale } => match &scene.lights[light] {
             Light::Area { triangle, radiance } => {
                 let t = &scene.geometry.triangles[*triangle as usize];
-                let (b1, b2) = uniform_triangle(u_pos.0, u_pos.1);
-                let y = t.p0 + t.e1 * b1 + t.e2 * b2;
+                let y = t.sample_point(u_pos);
                 let (w, pdf) = from_map(&|| {
                     let l = cosine_hemisphere(u_dir.0, u_dir.1);
                     (LocalFrame::from_normal(t.ng).to_world(l), l.z * FRAC_1_PI)

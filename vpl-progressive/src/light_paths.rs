@@ -64,11 +64,7 @@ impl PassVpl {
         match self.emitter {
             Emitter::Surface { y, .. } => Some(y.p),
             Emitter::Light { light, u_pos, .. } => match &scene.lights[light] {
-                vpl_core::Light::Area { triangle, .. } => {
-                    let t = &scene.geometry.triangles[*triangle as usize];
-                    let (b1, b2) = vpl_core::sampling::uniform_triangle(u_pos.0, u_pos.1);
-                    Some(t.p0 + t.e1 * b1 + t.e2 * b2)
-                }
+                vpl_core::Light::Area { triangle, .. } => Some(scene.geometry.triangles[*triangle as usize].sample_point(u_pos)),
                 vpl_core::Light::Point { position, .. } | vpl_core::Light::Spot { position, .. } => Some(*position),
                 vpl_core::Light::Directional { .. } => None,
             },

@@ -37,5 +37,5 @@ pub fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<
 /// Mitsuba's indirect reference of `cornell` (256×256) box-filtered to 64×64.
 pub fn mitsuba_indirect_64() -> Image {
     let full = Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).expect("the Mitsuba indirect reference");
-    vpl_bench::metrics::downsample(&full, 4).expect("256 is a multiple of 4")
+    vpl_render::metrics::downsample(&full, 4).expect("256 is a multiple of 4")
 }

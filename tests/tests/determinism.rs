@@ -1,7 +1,7 @@
 //! The same render is bit-identical on 1 and 2 threads, and tracked pixels too.
 
 use vpl_core::SceneSetup;
-use vpl_pathtrace::{render, track, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render, track};
 
 fn pool(n: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()

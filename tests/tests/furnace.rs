@@ -10,7 +10,7 @@
 
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, FovAxis, Light, Material, Mesh, RadiosityEstimator, Scene};
-use vpl_pathtrace::{render, Mode, PathRadiosity, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathRadiosity, PathTracer, RenderSettings, render};
 
 const LE: f32 = 1.0;
 const RHO: f32 = 0.5;
@@ -39,7 +39,10 @@ fn check_mean(scene: &Scene, pt: PathTracer, expected: f64, what: &str) {
         let se = r.stderr.data.iter().map(|s| (s[c] as f64).powi(2)).sum::<f64>().sqrt() / n;
         let z = (mean - expected) / se.max(1e-12);
         eprintln!("{what}: mean {mean:.6}, expected {expected:.6}, σ {se:.2e}, z {z:+.2}");
-        assert!(z.abs() < 4.0 || (se < 1e-9 && (mean - expected).abs() < 1e-5 * expected), "{what}: mean {mean} vs closed form {expected} (z = {z:.2})");
+        assert!(
+            z.abs() < 4.0 || (se < 1e-9 && (mean - expected).abs() < 1e-5 * expected),
+            "{what}: mean {mean} vs closed form {expected} (z = {z:.2})"
+        );
     }
 }
 
@@ -59,7 +62,9 @@ fn furnace_box_detects_a_wrong_albedo() {
     // The check itself must be able to fail: the same render against the
     // closed form for ρ = 0.52 is far outside 4 σ.
     let s = furnace_box();
-    let result = std::panic::catch_unwind(|| check_mean(&s, PathTracer::new(5, Mode::Full), 1.0 + 0.52 + 0.52f64.powi(2) + 0.52f64.powi(3) + 0.52f64.powi(4), "wrong"));
+    let result = std::panic::catch_unwind(|| {
+        check_mean(&s, PathTracer::new(5, Mode::Full), 1.0 + 0.52 + 0.52f64.powi(2) + 0.52f64.powi(3) + 0.52f64.powi(4), "wrong")
+    });
     assert!(result.is_err());
 }
 
@@ -82,7 +87,13 @@ fn radiosity_estimator_in_the_furnace() {
 /// A 200 m floor at y = 0 with albedo ρ and the given lights; camera above looking down.
 fn plane(lights: Vec<Light>) -> (Scene, Camera) {
     let mut mesh = Mesh::default();
-    mesh.push_quad(Vec3::new(-100.0, 0.0, -100.0), Vec3::new(-100.0, 0.0, 100.0), Vec3::new(100.0, 0.0, 100.0), Vec3::new(100.0, 0.0, -100.0), 0);
+    mesh.push_quad(
+        Vec3::new(-100.0, 0.0, -100.0),
+        Vec3::new(-100.0, 0.0, 100.0),
+        Vec3::new(100.0, 0.0, 100.0),
+        Vec3::new(100.0, 0.0, -100.0),
+        0,
+    );
     let scene = Scene::new("plane", &mesh, vec![Material::diffuse("floor", Vec3::splat(RHO))], lights, true).unwrap();
     // Odd image size so the centre pixel straddles the point below the camera; 0.5° field of view.
     let cam = Camera::new(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO, Vec3::Z, 0.5, FovAxis::Smaller, (5, 5)).unwrap();
@@ -102,11 +113,23 @@ fn point_spot_and_sun_have_closed_forms() {
     let got = centre(&s, &c);
     assert!((got.x - want).abs() < 1e-4 * want, "point: {got} vs {want}");
 
-    let spot = Light::Spot { position: Vec3::new(0.0, h, 0.0), direction: -Vec3::Y, intensity: Vec3::splat(i), cos_falloff_start: 0.9, cos_total: 0.8 };
+    let spot = Light::Spot {
+        position: Vec3::new(0.0, h, 0.0),
+        direction: -Vec3::Y,
+        intensity: Vec3::splat(i),
+        cos_falloff_start: 0.9,
+        cos_total: 0.8,
+    };
     let (s, c) = plane(vec![spot]);
     let got = centre(&s, &c);
     assert!((got.x - want).abs() < 1e-4 * want, "spot: {got} vs {want}");
-    let off = Light::Spot { position: Vec3::new(0.0, h, 0.0), direction: Vec3::new(1.0, -0.2, 0.0).normalize(), intensity: Vec3::splat(i), cos_falloff_start: 0.99, cos_total: 0.98 };
+    let off = Light::Spot {
+        position: Vec3::new(0.0, h, 0.0),
+        direction: Vec3::new(1.0, -0.2, 0.0).normalize(),
+        intensity: Vec3::splat(i),
+        cos_falloff_start: 0.99,
+        cos_total: 0.98,
+    };
     let (s, c) = plane(vec![off]);
     assert_eq!(centre(&s, &c), Vec3::ZERO, "outside the cone");
 
@@ -145,7 +168,8 @@ fn progressive_furnace(mirrors: bool) -> Scene {
 fn progressive_mean(scene: &Scene, config: vpl_progressive::ProgressiveConfig, passes: u64) -> (f64, f64) {
     let cam = Camera::new(Vec3::new(0.2, -0.1, 0.3), Vec3::new(-0.5, 0.2, -1.0), Vec3::Y, 90.0, FovAxis::Smaller, (24, 24)).unwrap();
     let r = vpl_progressive::Progressive::new(scene, cam, config).unwrap();
-    let means: Vec<f64> = (0..passes).map(|p| r.render_pass(p).0.iter().map(|v| v.element_sum() as f64 / 3.0).sum::<f64>() / 576.0).collect();
+    let means: Vec<f64> =
+        (0..passes).map(|p| r.render_pass(p).0.iter().map(|v| v.element_sum() as f64 / 3.0).sum::<f64>() / 576.0).collect();
     let n = means.len() as f64;
     let m = means.iter().sum::<f64>() / n;
     let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
@@ -159,7 +183,13 @@ fn progressive_furnace_adds_up_to_the_closed_form() {
         let s = progressive_furnace(mirrors);
         // Photons fall into every bin that holds them: unclipped bins, an unbiased disk average
         // of a uniform field.
-        let config = ProgressiveConfig { max_depth: depth, caustic_paths: 20_000, seed: 2, bins: BinRule::AllWithin, ..ProgressiveConfig::default() };
+        let config = ProgressiveConfig {
+            max_depth: depth,
+            caustic_paths: 20_000,
+            seed: 2,
+            bins: BinRule::AllWithin,
+            ..ProgressiveConfig::default()
+        };
         let (m, se) = progressive_mean(&s, config.clone(), 1024);
         let expected = series(0, depth - 1);
         let z = (m - expected) / se.max(1e-12);

@@ -3,10 +3,10 @@
 //! files, and every kind of bad input as a typed error.
 
 use std::path::Path;
-use vpl_bench::compare::compare;
 use vpl_core::glam::Vec3;
 use vpl_core::{CoreError, SceneSetup};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
+use vpl_render::compare::compare;
 use vpl_tests::{data_dir, scratch_dir};
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
@@ -106,7 +106,11 @@ fn missing_mtl_gives_the_default_material_and_a_warning() {
     assert!(d.warnings.iter().any(|w| w.contains("material library")), "{:?}", d.warnings);
     assert_eq!(d.materials, vec![vpl_core::Material::default_material()]);
     // With a light from a scene file it renders.
-    let t = write(&dir, "n.toml", "[geometry]\nobj = \"n.obj\"\n[[lights]]\ntype = \"point\"\nposition = [0.2, 0.2, 1.0]\nintensity = [1, 1, 1]\n");
+    let t = write(
+        &dir,
+        "n.toml",
+        "[geometry]\nobj = \"n.obj\"\n[[lights]]\ntype = \"point\"\nposition = [0.2, 0.2, 1.0]\nintensity = [1, 1, 1]\n",
+    );
     let s = SceneSetup::load(&t).unwrap();
     assert!(s.warnings.iter().any(|w| w.contains("nowhere.mtl")));
     // Without one it is a scene without lights.
@@ -116,7 +120,8 @@ fn missing_mtl_gives_the_default_material_and_a_warning() {
 #[test]
 fn bad_inputs_are_typed_errors() {
     let dir = scratch_dir("loaders-bad");
-    let cases: Vec<(String, fn(&CoreError) -> bool)> = vec![
+    type Case = (String, fn(&CoreError) -> bool);
+    let cases: Vec<Case> = vec![
         (write(&dir, "malformed.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::Obj { .. })),
         (dir.join("missing.obj").to_string_lossy().into_owned(), |e| matches!(e, CoreError::Read { .. })),
         (write(&dir, "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::NonFinite { .. })),
@@ -124,11 +129,26 @@ fn bad_inputs_are_typed_errors() {
         (write(&dir, "empty.obj", "# nothing\n"), |e| matches!(e, CoreError::EmptyScene(_))),
         (write(&dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), |e| matches!(e, CoreError::EmptyScene(_))),
         (write(&dir, "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::NoLights(_))),
-        (write(&dir, "fov0.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 0\n"), |e| matches!(e, CoreError::Camera(_))),
-        (write(&dir, "fovneg.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = -30\n"), |e| matches!(e, CoreError::Camera(_))),
-        (write(&dir, "size0.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 40\nresolution = [0, 10]\n"), |e| matches!(e, CoreError::Camera(_))),
-        (write(&dir, "unknown.toml", "[geometry]\nbuiltin = \"cornell\"\nshiny = true\n"), |e| matches!(e, CoreError::SceneFile { .. }) && e.to_string().contains("shiny")),
-        (write(&dir, "badlight.toml", "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"laser\"\n"), |e| matches!(e, CoreError::SceneFile { .. })),
+        (write(&dir, "fov0.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 0\n"), |e| {
+            matches!(e, CoreError::Camera(_))
+        }),
+        (write(&dir, "fovneg.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = -30\n"), |e| {
+            matches!(e, CoreError::Camera(_))
+        }),
+        (
+            write(
+                &dir,
+                "size0.toml",
+                "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 40\nresolution = [0, 10]\n",
+            ),
+            |e| matches!(e, CoreError::Camera(_)),
+        ),
+        (write(&dir, "unknown.toml", "[geometry]\nbuiltin = \"cornell\"\nshiny = true\n"), |e| {
+            matches!(e, CoreError::SceneFile { .. }) && e.to_string().contains("shiny")
+        }),
+        (write(&dir, "badlight.toml", "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"laser\"\n"), |e| {
+            matches!(e, CoreError::SceneFile { .. })
+        }),
         ("no-such-builtin".into(), |e| matches!(e, CoreError::UnknownBuiltin(_))),
     ];
     for (path, ok) in cases {
@@ -150,7 +170,10 @@ fn material_overrides_and_z_up() {
     let t = write(
         &dir,
         "o.toml",
-        &format!("[geometry]\nobj = \"{}\"\nup = \"z\"\nscale = 2.0\n\n[[materials]]\nname = \"red\"\nalbedo = [0.1, 0.2, 0.3]\nkappa = 0.5\n", obj.display()),
+        &format!(
+            "[geometry]\nobj = \"{}\"\nup = \"z\"\nscale = 2.0\n\n[[materials]]\nname = \"red\"\nalbedo = [0.1, 0.2, 0.3]\nkappa = 0.5\n",
+            obj.display()
+        ),
     );
     let s = SceneSetup::load(&t).unwrap();
     let red = s.scene.materials.iter().find(|m| m.name == "red").unwrap();

@@ -12,8 +12,8 @@
 //! On failure the difference and |z| images are written to
 //! `target/test-output/mitsuba/`.
 
-use vpl_bench::compare::compare;
 use vpl_bench::validation::{validate_cornell, write_difference};
+use vpl_render::compare::compare;
 use vpl_tests::{data_dir, scratch_dir};
 
 /// Samples per pixel of our renders.

@@ -10,7 +10,7 @@
 
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, Image, Scene, SceneSetup};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
 use vpl_tests::data_dir;
 
@@ -100,7 +100,12 @@ fn z(a: Vec3, sa: Vec3, b: Vec3, sb: Vec3) -> f32 {
 }
 
 fn rel_mse(a: &Image, b: &Image) -> f64 {
-    a.data.iter().zip(&b.data).map(|(x, y)| (0..3).map(|c| ((x[c] - y[c]) as f64).powi(2) / ((y[c] as f64).powi(2) + 1e-2)).sum::<f64>()).sum::<f64>() / (3 * a.data.len()) as f64
+    a.data
+        .iter()
+        .zip(&b.data)
+        .map(|(x, y)| (0..3).map(|c| ((x[c] - y[c]) as f64).powi(2) / ((y[c] as f64).powi(2) + 1e-2)).sum::<f64>())
+        .sum::<f64>()
+        / (3 * a.data.len()) as f64
 }
 
 /// Box-filters an image by `f` × `f` (standard errors: pass `se = true`).
@@ -158,13 +163,24 @@ fn glass_matches_the_path_tracer() {
     let setup = SceneSetup::load("glass").unwrap();
     let camera = setup.camera.with_resolution((64, 48)).unwrap();
     let n = (64 * 48) as usize;
-    let pt = render(&setup.scene, &camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp: 4096, seed: 3, frame: 0 }, &|_, _| {}).unwrap();
+    let pt = render(&setup.scene, &camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp: 4096, seed: 3, frame: 0 }, &|_, _| {})
+        .unwrap();
     let config = ProgressiveConfig { seed: 11, caustic_paths: 20_000, ..Default::default() };
     let full = Passes::render(&setup.scene, &camera, config.clone(), 384);
     // The masks come from renders with other seeds: a mask chosen from the
     // same noise as the image it selects would bias the region means.
-    let caustic_only = Passes::render(&setup.scene, &camera, ProgressiveConfig { techniques: Techniques { caustics: true, ..Techniques::NONE }, seed: 12, ..config.clone() }, 384);
-    let sg_only = Passes::render(&setup.scene, &camera, ProgressiveConfig { techniques: Techniques { specular_gathering: true, ..Techniques::NONE }, seed: 13, ..config.clone() }, 64);
+    let caustic_only = Passes::render(
+        &setup.scene,
+        &camera,
+        ProgressiveConfig { techniques: Techniques { caustics: true, ..Techniques::NONE }, seed: 12, ..config.clone() },
+        384,
+    );
+    let sg_only = Passes::render(
+        &setup.scene,
+        &camera,
+        ProgressiveConfig { techniques: Techniques { specular_gathering: true, ..Techniques::NONE }, seed: 13, ..config.clone() },
+        64,
+    );
     let full_img = full.mean_of(full.n());
     let caustic_img = caustic_only.mean_of(caustic_only.n());
     let sg_img = sg_only.mean_of(sg_only.n());
@@ -186,12 +202,18 @@ fn glass_matches_the_path_tracer() {
     let through_specular: Vec<bool> = sg_img.data.iter().map(|v| v.max_element() > 0.0).collect();
     let direct_diffuse: Vec<bool> = (0..n).map(|i| !caustic[i] && !through_specular[i]).collect();
     let specular_away: Vec<bool> = (0..n).map(|i| !caustic[i] && through_specular[i]).collect();
-    let caustic_core: Vec<bool> = (0..n).map(|i| caustic_img.data[i].max_element() > 0.05 * full_img.data[i].max_element() && !through_specular[i]).collect();
-    for (name, mask) in [("diffuse, away from caustics", &direct_diffuse), ("seen through specular surfaces, away from caustics", &specular_away)] {
+    let caustic_core: Vec<bool> =
+        (0..n).map(|i| caustic_img.data[i].max_element() > 0.05 * full_img.data[i].max_element() && !through_specular[i]).collect();
+    for (name, mask) in
+        [("diffuse, away from caustics", &direct_diffuse), ("seen through specular surfaces, away from caustics", &specular_away)]
+    {
         let (m, se) = full.region(mask);
         let (pm, pse) = pixel_region(&pt.image, &pt.stderr, mask);
         let zz = z(m, se, pm, pse);
-        eprintln!("glass, {name} ({} px): progressive {m} ± {se}, path tracer {pm} ± {pse}, |z| = {zz:.2}", mask.iter().filter(|m| **m).count());
+        eprintln!(
+            "glass, {name} ({} px): progressive {m} ± {se}, path tracer {pm} ± {pse}, |z| = {zz:.2}",
+            mask.iter().filter(|m| **m).count()
+        );
         assert!(zz <= 4.0, "{name}: the techniques' sum differs from the path tracer by {zz:.1} standard errors");
     }
     // The caustic: where the histogram puts light, the path tracer has it too.
@@ -199,9 +221,15 @@ fn glass_matches_the_path_tracer() {
     let (cm, cse) = caustic_only.region(&caustic_core);
     let (pm, pse) = pixel_region(&pt.image, &pt.stderr, &caustic_core);
     let without = m - cm;
-    eprintln!("glass, caustic core ({} px): progressive {m} ± {se} (histogram {cm} ± {cse}), path tracer {pm} ± {pse}", caustic_core.iter().filter(|m| **m).count());
+    eprintln!(
+        "glass, caustic core ({} px): progressive {m} ± {se} (histogram {cm} ± {cse}), path tracer {pm} ± {pse}",
+        caustic_core.iter().filter(|m| **m).count()
+    );
     assert!(caustic_core.iter().filter(|m| **m).count() >= 4, "no caustic found");
-    assert!(z(pm, pse, without, se) > 4.0 && pm.max_element() > without.max_element(), "the path tracer has no caustic where the histogram puts one");
+    assert!(
+        z(pm, pse, without, se) > 4.0 && pm.max_element() > without.max_element(),
+        "the path tracer has no caustic where the histogram puts one"
+    );
     let ratio = m.element_sum() / pm.element_sum();
     eprintln!("glass, caustic core: progressive / path tracer = {ratio:.3}");
     // The bins' bias (fixed radius, closest bin only) stays within the noise here.
@@ -270,13 +298,18 @@ fn unbiased_culling_keeps_the_image() {
     let ((off_m, off_se), _) = run(Culling::Off, 1);
     let ((un_m, un_se), un_stats) = run(Culling::Unbiased { accept: 0.125 }, 2);
     let ((det_m, det_se), det_stats) = run(Culling::Deterministic, 2);
-    eprintln!("cornell: no culling {off_m} ± {off_se}; unbiased {un_m} ± {un_se} (VPLs made, stored, unseen kept: {un_stats:?}); deterministic {det_m} ± {det_se} ({det_stats:?})");
+    eprintln!(
+        "cornell: no culling {off_m} ± {off_se}; unbiased {un_m} ± {un_se} (VPLs made, stored, unseen kept: {un_stats:?}); deterministic {det_m} ± {det_se} ({det_stats:?})"
+    );
     assert!(un_stats.1 * 10 < un_stats.0 * 9, "culling removed under 10 % of the VPLs: {un_stats:?}");
     assert!(un_stats.2 > 0, "no unseen VPL was kept");
     let zu = z(un_m, un_se, off_m, off_se);
     assert!(zu <= 4.0, "unbiased culling changed the image by {zu:.1} standard errors");
     let zd = z(det_m, det_se, off_m, off_se);
-    assert!(zd > 4.0, "deterministic culling with 8 representatives should be biased with 2 representatives ({zd:.1} s.e.): the check has no power");
+    assert!(
+        zd > 4.0,
+        "deterministic culling with 8 representatives should be biased with 2 representatives ({zd:.1} s.e.): the check has no power"
+    );
 }
 
 /// Thin-lens depth of field: with a lens, the progressive renderer and the
@@ -286,13 +319,15 @@ fn unbiased_culling_keeps_the_image() {
 fn thin_lens_matches_the_path_tracer() {
     let setup = SceneSetup::load("glass").unwrap();
     let mut camera = setup.camera.with_resolution((48, 36)).unwrap();
-    let pin = Passes::render(&setup.scene, &camera, ProgressiveConfig { seed: 4, caustic_paths: 5000, ..Default::default() }, 64).mean_of(64);
+    let pin =
+        Passes::render(&setup.scene, &camera, ProgressiveConfig { seed: 4, caustic_paths: 5000, ..Default::default() }, 64).mean_of(64);
     camera.lens_radius = 0.25;
     camera.focus_distance = 3.0;
     let n = (48 * 36) as usize;
     let all = vec![true; n];
     let lens = Passes::render(&setup.scene, &camera, ProgressiveConfig { seed: 4, caustic_paths: 5000, ..Default::default() }, 256);
-    let pt = render(&setup.scene, &camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp: 2048, seed: 9, frame: 0 }, &|_, _| {}).unwrap();
+    let pt = render(&setup.scene, &camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp: 2048, seed: 9, frame: 0 }, &|_, _| {})
+        .unwrap();
     let (m, se) = lens.region(&all);
     let (pm, pse) = pixel_region(&pt.image, &pt.stderr, &all);
     let zz = z(m, se, pm, pse);

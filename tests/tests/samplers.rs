@@ -6,12 +6,17 @@
 //! degenerate cases. Fixed seeds; every bound is stated with its reason.
 
 use rayon::ThreadPoolBuilder;
-use vpl_bench::metrics::rel_mse;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, Frame, GBuffer, GeometryClamp, Image, Light, Material, Mesh, Scene, SceneSetup, VplSampler, VplSet};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_core::{Camera, Frame, GBuffer, Image, Light, Material, Mesh, Scene, SceneSetup, VplSampler, VplSet};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
+use vpl_render::metrics::rel_mse;
 use vpl_rr::{RrConfig, RrSampler};
-use vpl_sampling::{build, SamplerConfig};
+use vpl_sampling::{Registry, SamplingError};
+
+/// A built-in sampler with its default settings for `vpls` VPLs and depth 5.
+fn build(name: &str, vpls: usize) -> Result<Box<dyn VplSampler>, SamplingError> {
+    Registry::builtin().build_default(name, vpl_core::Budget::new(vpls, 5))
+}
 use vpl_shading::render_gbuffer;
 use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 
@@ -68,7 +73,7 @@ fn mean_and_se_of(xs: &[f64]) -> (f64, f64) {
 fn rr_is_unbiased_given_its_candidates() {
     let (scene, camera) = setup("corner", (32, 24));
     let gbuf = render_gbuffer(&scene, &camera);
-    let mut ir = build("ir", &SamplerConfig { vpls: 1024, ..SamplerConfig::default() }).unwrap();
+    let mut ir = build("ir", 1024).unwrap();
     let s_set = ir.next_frame(&frame(&scene, &camera, &gbuf, 0, 1)).clone();
     let target = exhaustive_rt(&scene, &gbuf, &s_set, None);
     let frames = 200;
@@ -108,7 +113,10 @@ fn rr_is_unbiased_given_its_candidates() {
         }
     }
     eprintln!("{outliers} of {tested} pixel channels with |z| > 3");
-    assert!(tested > 1000 && (outliers as f64) <= 0.01 * tested as f64, "{outliers} of {tested} pixel channels differ by more than 3 standard errors");
+    assert!(
+        tested > 1000 && (outliers as f64) <= 0.01 * tested as f64,
+        "{outliers} of {tested} pixel channels differ by more than 3 standard errors"
+    );
 }
 
 /// RR's mean indirect energy on `cornell` matches Mitsuba's indirect
@@ -125,7 +133,7 @@ fn rr_energy_matches_the_mitsuba_indirect_reference() {
     for seed in 0..2 {
         let mut rr = RrSampler::over_ir(RrConfig { vpls: 16384, pilot: true, ..RrConfig::default() }, 3, false).unwrap();
         let set = rr.next_frame(&frame(&scene, &camera, &gbuf, 0, 7 + seed)).clone();
-        eprintln!("{}", rr.report());
+        eprintln!("{}", VplSampler::stats(&rr));
         let m = exhaustive_rt(&scene, &gbuf, &set, None).mean();
         (0..3).for_each(|c| mean[c] += m[c] / 2.0);
     }
@@ -155,17 +163,26 @@ fn mir_and_mir_resample_converge_to_the_indirect_reference() {
     for name in ["mir", "mir-resample"] {
         let mut errors = Vec::new();
         for vpls in [1024, 4096, 16384] {
-            let mut s = build(name, &SamplerConfig { vpls, ..SamplerConfig::default() }).unwrap();
+            let mut s = build(name, vpls).unwrap();
             let set = s.next_frame(&frame(&scene, &camera, &gbuf, 0, 3)).clone();
             let img = exhaustive_rt(&scene, &gbuf, &set, None);
             let e = rel_mse(&img, &reference).unwrap();
             let m = img.mean();
-            eprintln!("{name} I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5}); {}", m[0], m[1], m[2], ref_mean[0], ref_mean[1], ref_mean[2], s.report());
+            eprintln!(
+                "{name} I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5}); {}",
+                m[0],
+                m[1],
+                m[2],
+                ref_mean[0],
+                ref_mean[1],
+                ref_mean[2],
+                s.stats()
+            );
             errors.push((e, m));
         }
         assert!(errors[2].0 < 0.5 * errors[0].0, "{name}: relMSE does not fall with I: {errors:?}");
-        for c in 0..3 {
-            let rel = (errors[2].1[c] - ref_mean[c]) / ref_mean[c];
+        for (c, r) in ref_mean.iter().enumerate() {
+            let rel = (errors[2].1[c] - r) / r;
             assert!(rel.abs() < 0.05, "{name}: channel {c} at 16K differs from the reference by {:.2} %", 100.0 * rel);
         }
     }
@@ -186,16 +203,30 @@ fn mir_and_mir_resample_converge_to_the_indirect_reference() {
 fn tcas_matches_a_single_bounce_path_traced_image() {
     let (scene, camera) = setup("cornell", (64, 64));
     let gbuf = render_gbuffer(&scene, &camera);
-    let pt = |depth| render(&scene, &camera, &PathTracer::new(depth, Mode::Indirect), RenderSettings { spp: 512, seed: 11, frame: 0 }, &|_, _| {}).unwrap().image;
+    let pt = |depth| {
+        render(&scene, &camera, &PathTracer::new(depth, Mode::Indirect), RenderSettings { spp: 512, seed: 11, frame: 0 }, &|_, _| {})
+            .unwrap()
+            .image
+    };
     let one = pt(3);
     let three = pt(5);
-    let mut tcas = build("tcas", &SamplerConfig { vpls: 16384, ..SamplerConfig::default() }).unwrap();
+    let mut tcas = build("tcas", 16384).unwrap();
     let set = tcas.next_frame(&frame(&scene, &camera, &gbuf, 0, 2)).clone();
     assert!(set.iter().all(|(_, v)| v.bounce == 1));
     let img = exhaustive_rt(&scene, &gbuf, &set, None);
     let (m, r1, r3) = (img.mean(), one.mean(), three.mean());
     let e = rel_mse(&img, &one).unwrap();
-    eprintln!("tcas: mean {:.5} {:.5} {:.5}, PT depth 3 {:.5} {:.5} {:.5}, depth 5 {:.5}; relMSE {e:.5}; {}", m[0], m[1], m[2], r1[0], r1[1], r1[2], r3[0], tcas.report());
+    eprintln!(
+        "tcas: mean {:.5} {:.5} {:.5}, PT depth 3 {:.5} {:.5} {:.5}, depth 5 {:.5}; relMSE {e:.5}; {}",
+        m[0],
+        m[1],
+        m[2],
+        r1[0],
+        r1[1],
+        r1[2],
+        r3[0],
+        tcas.stats()
+    );
     for c in 0..3 {
         let rel = (m[c] - r1[c]) / r1[c];
         assert!(rel.abs() < 0.03, "channel {c}: TCAS differs from the single-bounce image by {:.2} %", 100.0 * rel);
@@ -209,7 +240,7 @@ fn two_frames(name: &str, scene: &Scene, camera: &Camera, vpls: usize, threads: 
     let gbuf = GBuffer::empty();
     let pool = ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
-        let mut s = build(name, &SamplerConfig { vpls, ..SamplerConfig::default() }).unwrap();
+        let mut s = build(name, vpls).unwrap();
         (0..2).map(|i| s.next_frame(&frame(scene, camera, &gbuf, i, 9)).clone()).collect()
     })
 }
@@ -239,7 +270,13 @@ fn adaptive_samplers_survive_degenerate_cases() {
     let away = camera.looking(Vec3::new(0.0, 0.0, 50.0), Vec3::new(0.0, 0.0, 100.0)).unwrap();
     let mut mesh = Mesh::default();
     mesh.push_quad(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0), 0);
-    let dark = Scene::new("dark", &mesh, vec![Material::diffuse("m", Vec3::splat(0.5))], vec![Light::Point { position: Vec3::Y, intensity: Vec3::ZERO }], true);
+    let dark = Scene::new(
+        "dark",
+        &mesh,
+        vec![Material::diffuse("m", Vec3::splat(0.5))],
+        vec![Light::Point { position: Vec3::Y, intensity: Vec3::ZERO }],
+        true,
+    );
     for name in ADAPTIVE {
         let nothing = two_frames(name, &scene, &away, 32, 2);
         assert!(nothing.iter().all(|s| s.iter().all(|(_, v)| v.flux.is_finite())), "{name}: non-finite flux");
@@ -253,7 +290,10 @@ fn adaptive_samplers_survive_degenerate_cases() {
             assert!(sets.iter().all(|s| s.iter().all(|(_, v)| v.flux == Vec3::ZERO || v.flux.is_finite())), "{name}: dark scene");
         }
         let one = two_frames(name, &scene, &camera, 1, 2);
-        assert!(one.iter().all(|s| s.len() == 1 && s.iter().all(|(_, v)| v.flux.is_finite() && v.flux.min_element() >= 0.0)), "{name}: I = 1");
+        assert!(
+            one.iter().all(|s| s.len() == 1 && s.iter().all(|(_, v)| v.flux.is_finite() && v.flux.min_element() >= 0.0)),
+            "{name}: I = 1"
+        );
     }
 }
 
@@ -288,7 +328,7 @@ fn rr_thinning_of_an_overflow_is_unbiased() {
     assert_eq!(thinned, seeds, "the overflow branch was not taken in every seed");
     let ir: Vec<Image> = (0..seeds)
         .map(|s| {
-            let mut ir = build("ir", &SamplerConfig { vpls: 64, ..SamplerConfig::default() }).unwrap();
+            let mut ir = build("ir", 64).unwrap();
             let set = ir.next_frame(&frame(&scene, &camera, &gbuf, 0, 900 + s)).clone();
             exhaustive_rt(&scene, &gbuf, &set, None)
         })

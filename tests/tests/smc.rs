@@ -7,12 +7,12 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
-use vpl_bench::metrics::rel_mse;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, GeometryClamp, Image, Scene, SceneSetup, VplSet};
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
-use vpl_shading::{render_gbuffer, InterleavedShader};
-use vpl_smc::{mutually_visible, CameraPoint, SmcConfig, SmcSampler};
+use vpl_render::metrics::rel_mse;
+use vpl_shading::{InterleavedShader, render_gbuffer};
+use vpl_smc::{CameraPoint, SmcConfig, SmcSampler, mutually_visible};
 use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 use vpl_visibility::ShadowMaps;
 
@@ -154,11 +154,12 @@ fn static_frames(sampler: &mut dyn vpl_core::VplSampler, n: u64) -> (Vec<Image>,
     let clamp = Some(GeometryClamp::for_budget(1024, setup.scene.surface_area()));
     let mut vis = ShadowMaps::new(128).unwrap();
     let mut shader = InterleavedShader::new(clamp, 5);
-    let s = vpl_shading::FrameSettings { mode: vpl_core::Mode::Indirect, seed: 5, ..vpl_shading::FrameSettings::default() };
+    let s = vpl_render::FrameSettings { mode: vpl_core::Mode::Indirect, seed: 5, ..vpl_render::FrameSettings::default() };
     let mut images = Vec::new();
     let mut rebuilt = Vec::new();
     for index in 0..n {
-        let r = vpl_shading::render_frame(&setup.scene, &camera, vpl_shading::FrameSettings { index, ..s }, None, sampler, &mut vis, &mut shader);
+        let r =
+            vpl_render::render_frame(&setup.scene, &camera, vpl_render::FrameSettings { index, ..s }, None, sampler, &mut vis, &mut shader);
         images.push(r.image);
         rebuilt.push(r.visibility.rebuilt);
     }
@@ -184,7 +185,13 @@ fn a_static_view_gives_a_stable_smc_image_and_a_flickering_ir_image() {
     let (mir_frames, mir_rebuilt) = static_frames(&mut mir, 6);
     let (cs, ci, cf) = (frame_to_frame_change(&smc_frames), frame_to_frame_change(&ir_frames), frame_to_frame_change(&fixed_frames));
     let cm = frame_to_frame_change(&mir_frames);
-    eprintln!("frame-to-frame change: SMC {:.4} % (maps rebuilt {smc_rebuilt:?}), IR fresh paths {:.4} % (maps rebuilt {ir_rebuilt:?}), IR fixed paths {:.4} %, MIR {:.4} % (maps rebuilt {mir_rebuilt:?})", 100.0 * cs, 100.0 * ci, 100.0 * cf, 100.0 * cm);
+    eprintln!(
+        "frame-to-frame change: SMC {:.4} % (maps rebuilt {smc_rebuilt:?}), IR fresh paths {:.4} % (maps rebuilt {ir_rebuilt:?}), IR fixed paths {:.4} %, MIR {:.4} % (maps rebuilt {mir_rebuilt:?})",
+        100.0 * cs,
+        100.0 * ci,
+        100.0 * cf,
+        100.0 * cm
+    );
     assert!(cm > 5.0 * cs, "MIR changes by {:.3} %, SMC by {:.3} %", 100.0 * cm, 100.0 * cs);
     assert!(cs < 0.01, "SMC changes by {:.3} % a frame", 100.0 * cs);
     assert!(ci > 5.0 * cs, "IR with fresh paths changes by {:.3} %, SMC by {:.3} %", 100.0 * ci, 100.0 * cs);
@@ -217,7 +224,16 @@ fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
         let img = exhaustive_rt(scene, &gbuf, s.vpls(), None);
         let e = rel_mse(&img, &reference).unwrap();
         let m = img.mean();
-        eprintln!("I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5}), {:.1} s", m[0], m[1], m[2], ref_mean[0], ref_mean[1], ref_mean[2], t.elapsed().as_secs_f32());
+        eprintln!(
+            "I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5}), {:.1} s",
+            m[0],
+            m[1],
+            m[2],
+            ref_mean[0],
+            ref_mean[1],
+            ref_mean[2],
+            t.elapsed().as_secs_f32()
+        );
         errors.push((vpls, e, m));
     }
     let (_, _, m) = errors[2];
@@ -273,7 +289,10 @@ fn newly_visible_rooms_fill_within_frames() {
         let (target_light, target_share) = (room_light(target.vpls()), share(target.vpls()));
         let mut s = warmed(scene, &a, 1024, 100, seed);
         let before = share(s.vpls());
-        assert!(before < 0.1 * target_share, "seed {seed}: the room already held VPLs before the cut: {before}, steady share {target_share}");
+        assert!(
+            before < 0.1 * target_share,
+            "seed {seed}: the room already held VPLs before the cut: {before}, steady share {target_share}"
+        );
         let mut curve = Vec::new();
         for m in mean.iter_mut() {
             let l = room_light(s.iterate(scene, &b, seed)) / target_light;
@@ -281,7 +300,10 @@ fn newly_visible_rooms_fill_within_frames() {
             curve.push(l);
         }
         let first = curve.iter().position(|l| *l >= 0.8).map(|i| i + 1);
-        eprintln!("seed {seed}: VPL share {before:.3} before the cut, {target_share:.3} steady; {} after {frames} frames; 80 % of the light at frame {first:?}", share(s.vpls()));
+        eprintln!(
+            "seed {seed}: VPL share {before:.3} before the cut, {target_share:.3} steady; {} after {frames} frames; 80 % of the light at frame {first:?}",
+            share(s.vpls())
+        );
     }
     let first = mean.iter().position(|l| *l >= 0.8).map(|i| i + 1);
     eprintln!("mean light ratio per frame: {:?}", mean.iter().map(|l| (l * 1000.0).round() / 1000.0).collect::<Vec<_>>());
@@ -301,7 +323,11 @@ fn smc_is_bit_identical_across_thread_counts() {
             for _ in 0..6 {
                 s.iterate(&setup.scene, &camera, 11);
             }
-            s.vpls().slots().iter().map(|v| v.map(|v| (v.y.to_array().map(f32::to_bits), v.flux.to_array().map(f32::to_bits), v.id))).collect::<Vec<_>>()
+            s.vpls()
+                .slots()
+                .iter()
+                .map(|v| v.map(|v| (v.y.to_array().map(f32::to_bits), v.flux.to_array().map(f32::to_bits), v.id)))
+                .collect::<Vec<_>>()
         })
     };
     assert!(run(1) == run(2), "1 and 2 threads differ");
@@ -320,7 +346,7 @@ fn smc_is_bit_identical_across_thread_counts() {
 #[test]
 fn selection_does_not_bias_the_vpl_radiosities() {
     use vpl_core::Mode;
-    use vpl_pathtrace::{render, PathTracer, RenderSettings};
+    use vpl_pathtrace::{PathTracer, RenderSettings, render};
     for (name, frame) in [("office", 600), ("maze", 300)] {
         let setup = SceneSetup::load(name).unwrap();
         let (scene, camera) = setup.frame(frame).unwrap();
@@ -328,7 +354,15 @@ fn selection_does_not_bias_the_vpl_radiosities() {
         let gbuf = render_gbuffer(&scene, &camera);
         let s = warmed(&scene, &camera, 2048, 100, 5);
         let img = exhaustive_rt(&scene, &gbuf, s.vpls(), None);
-        let pt = render(&scene, &camera, &PathTracer::new(5, Mode::Indirect), RenderSettings { spp: 256, seed: 5, frame: frame as u64 }, &|_, _| {}).unwrap().image;
+        let pt = render(
+            &scene,
+            &camera,
+            &PathTracer::new(5, Mode::Indirect),
+            RenderSettings { spp: 256, seed: 5, frame: frame as u64 },
+            &|_, _| {},
+        )
+        .unwrap()
+        .image;
         let lum = |i: &Image| i.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>();
         let ratio = lum(&img) / lum(&pt);
         eprintln!("{name}: SMC / path tracing = {ratio:.3}");

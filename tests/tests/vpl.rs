@@ -3,12 +3,12 @@
 //! against exhaustive (c), clamped VPLs against the clamped path tracer (d),
 //! lazy shadow-map updates (e). Fixed seeds; every bound is stated with its reason.
 
-use vpl_bench::metrics::rel_mse;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, GeometryClamp, IndirectShader, Scene, SceneSetup, VplSet, VplVisibility};
 use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
-use vpl_shading::{render_gbuffer, ExhaustiveShader, InterleavedShader};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
+use vpl_render::metrics::rel_mse;
+use vpl_shading::{ExhaustiveShader, InterleavedShader, render_gbuffer};
 use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
@@ -19,7 +19,10 @@ fn cornell(size: u32) -> (Scene, Camera) {
 }
 
 fn ir(scene: &Scene, vpls: usize, seed: u64) -> VplSet {
-    InstantRadiosity::new(IrConfig { vpls, bounces: 3, sampling: PathSampling::Random, fresh_paths: false }).unwrap().sample(scene, seed).clone()
+    InstantRadiosity::new(IrConfig { vpls, bounces: 3, sampling: PathSampling::Random, fresh_paths: false })
+        .unwrap()
+        .sample(scene, seed)
+        .clone()
 }
 
 /// (a) IR, ray-traced visibility, exhaustive shading, no clamp, depth 5 on
@@ -46,7 +49,10 @@ fn a_instant_radiosity_converges_to_the_mitsuba_indirect_reference() {
         let img = exhaustive_rt(&scene, &gbuf, &set, None);
         let e = rel_mse(&img, &reference).unwrap();
         let m = img.mean();
-        eprintln!("I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5})", m[0], m[1], m[2], ref_mean[0], ref_mean[1], ref_mean[2]);
+        eprintln!(
+            "I = {vpls}: relMSE {e:.5}, mean {:.5} {:.5} {:.5} (reference {:.5} {:.5} {:.5})",
+            m[0], m[1], m[2], ref_mean[0], ref_mean[1], ref_mean[2]
+        );
         errors.push((vpls, e, m));
     }
     let (_, _, m) = errors[2];
@@ -56,7 +62,6 @@ fn a_instant_radiosity_converges_to_the_mitsuba_indirect_reference() {
     }
     assert!(errors[0].1 > errors[1].1 && errors[1].1 > errors[2].1, "relMSE does not fall with I: {errors:?}");
 }
-
 
 /// (b) Shadow maps against ray casts on `office` (64 IR VPLs, a 96×54 view):
 /// over the (pixel, VPL) pairs with a non-zero geometry term, 512² maps agree
@@ -85,11 +90,19 @@ fn b_shadow_maps_agree_with_ray_casts_and_improve_with_resolution() {
         assert_eq!(u.rebuilt, set.stored());
         let wrong = pairs.iter().zip(&exact).filter(|&(&(s, p, n), &e)| sm.visible(s, p, n) != e).count();
         let frac = wrong as f64 / pairs.len() as f64;
-        eprintln!("{res}x{res}: {:.3} % of {} pairs disagree, {:.1} MiB", 100.0 * frac, pairs.len(), u.memory_bytes as f64 / (1 << 20) as f64);
+        eprintln!(
+            "{res}x{res}: {:.3} % of {} pairs disagree, {:.1} MiB",
+            100.0 * frac,
+            pairs.len(),
+            u.memory_bytes as f64 / (1 << 20) as f64
+        );
         disagreement.push(frac);
     }
     assert!(disagreement[2] <= 0.02, "512² maps disagree on {:.2} % of pairs", 100.0 * disagreement[2]);
-    assert!(disagreement[0] > disagreement[1] && disagreement[1] > disagreement[2], "disagreement does not fall with resolution: {disagreement:?}");
+    assert!(
+        disagreement[0] > disagreement[1] && disagreement[1] > disagreement[2],
+        "disagreement does not fall with resolution: {disagreement:?}"
+    );
 }
 
 /// (c) Interleaved shading plus the cross-bilateral filter against exhaustive
@@ -143,19 +156,25 @@ fn d_clamped_vpls_match_the_clamped_path_tracer() {
         pt.clamp = clamp;
         render(&scene, &camera, &pt, RenderSettings { spp: 4096, seed: 1, frame: 0 }, &|_, _| {}).unwrap().image
     };
-    let clamp = Some(GeometryClamp::for_budget(2048, scene.surface_area()));
+    let g = GeometryClamp::for_budget(2048, scene.surface_area());
+    let clamp = Some(g);
     let clamped_pt = pt_image(clamp);
     let vpl = exhaustive_rt(&scene, &gbuf, &ir(&scene, 2048, 3), clamp);
     let e = rel_mse(&vpl, &clamped_pt).unwrap();
     let (mv, mp) = (vpl.mean(), clamped_pt.mean());
-    eprintln!("default clamp G_max = {:.1}: relMSE {e:.5}, means {mv:?} vs {mp:?}", clamp.unwrap().g_max);
+    eprintln!("default clamp G_max = {:.1}: relMSE {e:.5}, means {mv:?} vs {mp:?}", g.g_max);
     assert!(e <= 0.005, "relMSE against the clamped path tracer {e}");
     let strong = Some(GeometryClamp::new(2.0));
     let (strong_pt, full_pt) = (pt_image(strong).mean(), pt_image(None).mean());
     let vpl = exhaustive_rt(&scene, &gbuf, &ir(&scene, 16384, 4), strong).mean();
     eprintln!("G_max = 2: VPL mean {vpl:?}, clamped PT {strong_pt:?}, unclamped PT {full_pt:?}");
     for c in 0..3 {
-        assert!(((vpl[c] - strong_pt[c]) / strong_pt[c]).abs() < 0.02, "channel {c}: strongly clamped VPLs {} vs clamped path tracer {}", vpl[c], strong_pt[c]);
+        assert!(
+            ((vpl[c] - strong_pt[c]) / strong_pt[c]).abs() < 0.02,
+            "channel {c}: strongly clamped VPLs {} vs clamped path tracer {}",
+            vpl[c],
+            strong_pt[c]
+        );
         assert!((vpl[c] - full_pt[c]) / full_pt[c] < -0.04, "channel {c}: the strong clamp removed too little for the test to tell");
     }
 }
@@ -193,11 +212,14 @@ fn vpl_frames_are_bit_identical_across_thread_counts() {
             let mut sampler = InstantRadiosity::new(IrConfig { vpls: 300, ..IrConfig::default() }).unwrap();
             let mut vis = ShadowMaps::new(32).unwrap();
             let mut shader = InterleavedShader::new(Some(GeometryClamp::for_budget(300, scene.surface_area())), 7);
-            let s = vpl_shading::FrameSettings { seed: 7, ..vpl_shading::FrameSettings::default() };
-            vpl_shading::render_frame(&scene, &camera, s, None, &mut sampler, &mut vis, &mut shader).image
+            let s = vpl_render::FrameSettings { seed: 7, ..vpl_render::FrameSettings::default() };
+            vpl_render::render_frame(&scene, &camera, s, None, &mut sampler, &mut vis, &mut shader).image
         })
     };
     let (a, b) = (frame(1), frame(2));
     assert!(a.mean()[0] > 0.0);
-    assert!(a.data.iter().zip(&b.data).all(|(p, q)| p.to_array().map(f32::to_bits) == q.to_array().map(f32::to_bits)), "1 and 2 threads differ");
+    assert!(
+        a.data.iter().zip(&b.data).all(|(p, q)| p.to_array().map(f32::to_bits) == q.to_array().map(f32::to_bits)),
+        "1 and 2 threads differ"
+    );
 }

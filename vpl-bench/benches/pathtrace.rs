@@ -1,9 +1,9 @@
 //! Criterion bench of the path tracer on `cornell` (max-depth 5): throughput in paths.
 //! `cargo xtask bench-pt` gives the headline 256×256 figure; this tracks regressions.
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use vpl_core::{Ray, SceneSetup};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 
 fn bench(c: &mut Criterion) {
     let setup = SceneSetup::load("cornell").unwrap();

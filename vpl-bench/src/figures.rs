@@ -12,16 +12,18 @@
 //! variance ([`crate::metrics::reference_variance`]).
 
 use crate::metrics::{mse, reference_variance, rel_mse};
-use crate::plot::{line_chart, Chart, Series};
+use crate::plot::{Chart, Series, line_chart};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 use vpl_core::image::{luminance, write_atomic};
-use vpl_core::{Camera, CoreError, Frame, GBuffer, GeometryClamp, Image, IndirectShader, Mode, Scene, SceneSetup, VplSampler, VplSet, VplVisibility};
-use vpl_pathtrace::{render, PathTracer, RenderSettings};
+use vpl_core::{
+    Camera, CoreError, Frame, GBuffer, GeometryClamp, Image, IndirectShader, Mode, Scene, SceneSetup, VplSampler, VplSet, VplVisibility,
+};
+use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_sampling::{SmcConfig, SmcSampler};
-use vpl_shading::{render_gbuffer, ExhaustiveShader, InterleavedShader};
+use vpl_shading::{ExhaustiveShader, InterleavedShader, render_gbuffer};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 /// One image of a figure with its errors.
@@ -122,26 +124,28 @@ pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> R
     let exposure = exposure_for(&pt);
     let gbuf = render_gbuffer(&scene, &camera);
     let (set, smc_s) = smc_vpls(&scene, &camera, &gbuf, vpls, SmcConfig::default().warmup, s.seed)?;
-    let panel = |name: &str, label: &str, img: &Image, second: Option<(&Image, Option<&Image>)>, seconds: f64| -> Result<Panel, CoreError> {
-        save(dir, &format!("{scene_name}_{name}"), img, exposure)?;
-        let rmse_second = match second {
-            Some((b, Some(se))) => Some(rmse_vs(img, b, se)?),
-            Some((b, None)) => Some(mse(img, b)?.sqrt()),
-            None => None,
+    let panel =
+        |name: &str, label: &str, img: &Image, second: Option<(&Image, Option<&Image>)>, seconds: f64| -> Result<Panel, CoreError> {
+            save(dir, &format!("{scene_name}_{name}"), img, exposure)?;
+            let rmse_second = match second {
+                Some((b, Some(se))) => Some(rmse_vs(img, b, se)?),
+                Some((b, None)) => Some(mse(img, b)?.sqrt()),
+                None => None,
+            };
+            Ok(Panel {
+                name: format!("{scene_name}_{name}"),
+                label: label.into(),
+                rmse: rmse_vs(img, &pt, &pt_se)?,
+                rel_mse: rel_mse(img, &pt)?,
+                rmse_second,
+                mean_ratio: mean_luminance(img) / mean_luminance(&pt),
+                seconds,
+            })
         };
-        Ok(Panel {
-            name: format!("{scene_name}_{name}"),
-            label: label.into(),
-            rmse: rmse_vs(img, &pt, &pt_se)?,
-            rel_mse: rel_mse(img, &pt)?,
-            rmse_second,
-            mean_ratio: mean_luminance(img) / mean_luminance(&pt),
-            seconds,
-        })
-    };
     let mut f8 = Vec::new();
     f8.push(panel("pt", &format!("path tracing, {} spp", s.reference_spp), &pt, None, pt_s)?);
-    let mut clamped = panel("pt_clamped", "clamped path tracing (G ≤ I / A after the primary hit)", &cpt, Some((&cpt, Some(&cpt_se))), cpt_s)?;
+    let mut clamped =
+        panel("pt_clamped", "clamped path tracing (G ≤ I / A after the primary hit)", &cpt, Some((&cpt, Some(&cpt_se))), cpt_s)?;
     // Both images are noisy: remove the variance of each.
     clamped.rmse = (mse(&cpt, &pt)? - reference_variance(&pt_se) - reference_variance(&cpt_se)).max(0.0).sqrt();
     f8.push(clamped);
@@ -212,7 +216,15 @@ pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<Bud
         save(dir, &format!("{scene_name}_{k}k_error"), &abs, exposure)?;
         // The clamp's own bias: clamped against unclamped path tracing, both noisy.
         let clamp_rmse = (mse(&cpt, &pt)? - 2.0 * reference_variance(&pt_se)).max(0.0).sqrt();
-        out.push(BudgetPoint { vpls: b, g_max: clamp.g_max, rmse: rmse_vs(&img, &pt, &pt_se)?, clamp_rmse, rel_mse: rel_mse(&img, &pt)?, mean_ratio: mean_luminance(&img) / mean_luminance(&pt), seconds: smc_s + t });
+        out.push(BudgetPoint {
+            vpls: b,
+            g_max: clamp.g_max,
+            rmse: rmse_vs(&img, &pt, &pt_se)?,
+            clamp_rmse,
+            rel_mse: rel_mse(&img, &pt)?,
+            mean_ratio: mean_luminance(&img) / mean_luminance(&pt),
+            seconds: smc_s + t,
+        });
     }
     Ok(out)
 }
@@ -230,19 +242,61 @@ pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &Fig
     );
     let mut csv = String::from("figure,scene,panel,label,rmse,rel_mse,rmse_second,mean_ratio,seconds\n");
     for (scene, f8, f9) in figs {
-        let _ = writeln!(md, "## Fig. 8: `{scene}`\n\n| image | RMSE vs path tracing | relMSE | RMSE vs clamped path tracing | mean / path tracing's | seconds |\n| --- | ---: | ---: | ---: | ---: | ---: |");
+        let _ = writeln!(
+            md,
+            "## Fig. 8: `{scene}`\n\n| image | RMSE vs path tracing | relMSE | RMSE vs clamped path tracing | mean / path tracing's | seconds |\n| --- | ---: | ---: | ---: | ---: | ---: |"
+        );
         for p in f8 {
-            let _ = writeln!(md, "| {} | {:.5} | {:.4} | {} | {:.3} | {:.1} |", p.label, p.rmse, p.rel_mse, p.rmse_second.map_or("–".into(), |v| format!("{v:.5}")), p.mean_ratio, p.seconds);
-            let _ = writeln!(csv, "fig8,{scene},{},\"{}\",{},{},{},{},{}", p.name, p.label, p.rmse, p.rel_mse, p.rmse_second.map_or(String::new(), |v| v.to_string()), p.mean_ratio, p.seconds);
+            let _ = writeln!(
+                md,
+                "| {} | {:.5} | {:.4} | {} | {:.3} | {:.1} |",
+                p.label,
+                p.rmse,
+                p.rel_mse,
+                p.rmse_second.map_or("–".into(), |v| format!("{v:.5}")),
+                p.mean_ratio,
+                p.seconds
+            );
+            let _ = writeln!(
+                csv,
+                "fig8,{scene},{},\"{}\",{},{},{},{},{}",
+                p.name,
+                p.label,
+                p.rmse,
+                p.rel_mse,
+                p.rmse_second.map_or(String::new(), |v| v.to_string()),
+                p.mean_ratio,
+                p.seconds
+            );
         }
         md.push('\n');
         for p in f8 {
             let _ = write!(md, "![{}]({}.png) ", p.label, p.name);
         }
-        let _ = writeln!(md, "\n\n## Fig. 9: `{scene}`, shadow-map resolution (all VPLs at every pixel)\n\n| visibility | RMSE vs path tracing | RMSE vs ray tracing | seconds |\n| --- | ---: | ---: | ---: |");
+        let _ = writeln!(
+            md,
+            "\n\n## Fig. 9: `{scene}`, shadow-map resolution (all VPLs at every pixel)\n\n| visibility | RMSE vs path tracing | RMSE vs ray tracing | seconds |\n| --- | ---: | ---: | ---: |"
+        );
         for p in f9 {
-            let _ = writeln!(md, "| {} | {:.5} | {} | {:.1} |", p.label, p.rmse, p.rmse_second.map_or("–".into(), |v| format!("{v:.5}")), p.seconds);
-            let _ = writeln!(csv, "fig9,{scene},{},\"{}\",{},{},{},{},{}", p.name, p.label, p.rmse, p.rel_mse, p.rmse_second.map_or(String::new(), |v| v.to_string()), p.mean_ratio, p.seconds);
+            let _ = writeln!(
+                md,
+                "| {} | {:.5} | {} | {:.1} |",
+                p.label,
+                p.rmse,
+                p.rmse_second.map_or("–".into(), |v| format!("{v:.5}")),
+                p.seconds
+            );
+            let _ = writeln!(
+                csv,
+                "fig9,{scene},{},\"{}\",{},{},{},{},{}",
+                p.name,
+                p.label,
+                p.rmse,
+                p.rel_mse,
+                p.rmse_second.map_or(String::new(), |v| v.to_string()),
+                p.mean_ratio,
+                p.seconds
+            );
         }
         md.push('\n');
         for p in f9 {
@@ -271,10 +325,18 @@ pub fn write_fig10(dir: &Path, figs: &[(String, Vec<BudgetPoint>)], s: &FigureSe
     let mut series = Vec::new();
     let palette = [(213, 94, 0), (0, 114, 178), (0, 158, 115)];
     for (i, (scene, pts)) in figs.iter().enumerate() {
-        let _ = writeln!(md, "## `{scene}`\n\n| VPLs | G_max (1/m²) | RMSE | clamp alone | relMSE | mean / path tracing's | seconds |\n| ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+        let _ = writeln!(
+            md,
+            "## `{scene}`\n\n| VPLs | G_max (1/m²) | RMSE | clamp alone | relMSE | mean / path tracing's | seconds |\n| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        );
         for p in pts {
-            let _ = writeln!(md, "| {} | {:.1} | {:.5} | {:.5} | {:.4} | {:.3} | {:.1} |", p.vpls, p.g_max, p.rmse, p.clamp_rmse, p.rel_mse, p.mean_ratio, p.seconds);
-            let _ = writeln!(csv, "{scene},{},{},{},{},{},{},{}", p.vpls, p.g_max, p.rmse, p.clamp_rmse, p.rel_mse, p.mean_ratio, p.seconds);
+            let _ = writeln!(
+                md,
+                "| {} | {:.1} | {:.5} | {:.5} | {:.4} | {:.3} | {:.1} |",
+                p.vpls, p.g_max, p.rmse, p.clamp_rmse, p.rel_mse, p.mean_ratio, p.seconds
+            );
+            let _ =
+                writeln!(csv, "{scene},{},{},{},{},{},{},{}", p.vpls, p.g_max, p.rmse, p.clamp_rmse, p.rel_mse, p.mean_ratio, p.seconds);
         }
         let _ = write!(md, "\n![reference]({scene}_reference.png) ");
         for p in pts {
@@ -282,11 +344,29 @@ pub fn write_fig10(dir: &Path, figs: &[(String, Vec<BudgetPoint>)], s: &FigureSe
         }
         md.push_str("\n\n");
         let c = palette[i % palette.len()];
-        series.push(Series { label: format!("{scene}: SMC VPLs"), points: pts.iter().map(|p| (p.vpls as f64, p.rmse)).collect(), color: c, bold: true, markers: true });
-        series.push(Series { label: format!("{scene}: clamp alone"), points: pts.iter().map(|p| (p.vpls as f64, p.clamp_rmse)).collect(), color: (c.0 / 2, c.1 / 2, c.2 / 2), bold: false, markers: true });
+        series.push(Series {
+            label: format!("{scene}: SMC VPLs"),
+            points: pts.iter().map(|p| (p.vpls as f64, p.rmse)).collect(),
+            color: c,
+            bold: true,
+            markers: true,
+        });
+        series.push(Series {
+            label: format!("{scene}: clamp alone"),
+            points: pts.iter().map(|p| (p.vpls as f64, p.clamp_rmse)).collect(),
+            color: (c.0 / 2, c.1 / 2, c.2 / 2),
+            bold: false,
+            markers: true,
+        });
     }
     md.push_str("![RMSE against VPLs](fig10_error.png)\n");
-    let chart = Chart { title: "Fig. 10: RMSE against the VPL budget", x_label: "VPLs", y_label: "RMSE (indirect radiance)", log: (true, true), size: (800, 500) };
+    let chart = Chart {
+        title: "Fig. 10: RMSE against the VPL budget",
+        x_label: "VPLs",
+        y_label: "RMSE (indirect radiance)",
+        log: (true, true),
+        size: (800, 500),
+    };
     line_chart(&dir.join("fig10_error.png"), &chart, &series)?;
     write_atomic(&dir.join("fig10.md"), md.as_bytes())?;
     write_atomic(&dir.join("fig10.csv"), csv.as_bytes())?;

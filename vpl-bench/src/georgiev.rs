@@ -12,14 +12,15 @@
 //! frame's sampling, visibility and shading. Both methods use ray-traced
 //! visibility and exhaustive shading, so only the VPLs differ.
 
+use crate::error::BenchError;
 use crate::metrics::{mse, reference_variance};
+use crate::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
 use rayon::prelude::*;
-use crate::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
 use std::fmt::Write as _;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Camera, GeometryClamp, Image, Mode, Purpose, Scene, SceneSetup};
+use vpl_core::{Budget, Camera, GeometryClamp, Image, Mode, Params, Purpose, Scene, SceneSetup, stream};
 use vpl_pathtrace::PathTracer;
-use vpl_sampling::{RrConfig, SamplerConfig};
+use vpl_sampling::{Registry, RrConfig};
 
 /// Settings of the experiment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,17 +77,21 @@ impl MethodFigures {
 }
 
 fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSpec {
-    let vpls = s.vpls;
+    let mut params = Params::new();
+    params.offer("fresh-paths", true);
+    params.offer("rr-epsilon", s.rr.epsilon).offer("camera-samples", s.rr.camera_samples).offer("rr-pilot", s.rr.pilot);
+    params.offer("rr-max-candidates", s.rr.max_candidates_factor);
     PipelineSpec {
         sampler: sampler.into(),
-        config: SamplerConfig { vpls, fresh_paths: true, rr: RrConfig { vpls, ..s.rr }, ..SamplerConfig::default() },
+        params,
+        budget: Budget::new(s.vpls, 5),
         visibility: VisibilitySpec::RayTraced,
         shading: ShadingSpec::Exhaustive,
         clamp: Some(clamp),
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: s.seed,
-        backend: Backend::Cpu,
+        backend: BackendKind::Cpu,
     }
 }
 
@@ -117,25 +122,31 @@ pub fn centre_reference(scene: &Scene, camera: &Camera, pt: &PathTracer, spp: u3
     (img(|p| p.0), img(|p| p.1))
 }
 
-fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<(&Image, f64)>, progress: &dyn Fn(&str)) -> Result<(MethodFigures, Image), String> {
-    let setup = SceneSetup::load(scene_name).map_err(|e| e.to_string())?;
-    let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
+fn run(
+    scene_name: &str,
+    sampler: &str,
+    s: &GeorgievSettings,
+    reference: Option<(&Image, f64)>,
+    progress: &dyn Fn(&str),
+) -> Result<(MethodFigures, Image), BenchError> {
+    let setup = SceneSetup::load(scene_name)?;
+    let camera = setup.camera.with_resolution(s.size)?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
-    let mut p = Pipeline::new(spec(sampler, s, clamp))?;
+    let mut p = spec(sampler, s, clamp).build(&Registry::builtin(), &setup.scene)?;
     let mut f = MethodFigures::default();
     let mut last = Image::new(s.size.0, s.size.1);
     for i in 0..s.warmup_frames + s.frames {
-        let out = p.render(&setup.scene, &camera, i as u64, 0.0);
-        progress(&format!("{scene_name} {sampler} frame {i}: {}", out.sampler_report));
+        let out = p.render(&setup.scene, &camera, i as u64, 0.0)?;
+        progress(&format!("{scene_name} {sampler} frame {i}: {}", out.sampler_stats));
         if i < s.warmup_frames {
             continue;
         }
         let n = s.frames as f64;
         if let Some((r, var)) = reference {
-            f.mse += (mse(&out.image, r).map_err(|e| e.to_string())? - var) / n;
+            f.mse += (mse(&out.image, r)? - var) / n;
         }
         f.ms += (out.timings.sampling_ms + out.timings.visibility_ms + out.timings.shading_ms) / n;
-        let acc = p.sampler.acceptance().map_or(1.0, |a| a as f64);
+        let acc = out.sampler_stats.get("acceptance").unwrap_or(1.0);
         f.acceptance += acc / n;
         f.stored += out.stored as f64 / n;
         last = out.image;
@@ -146,9 +157,9 @@ fn run(scene_name: &str, sampler: &str, s: &GeorgievSettings, reference: Option<
 /// The experiment; returns the Markdown report and the CSV rows. Besides
 /// `s.rr`, RR runs on `corner` with each ε of `sweep` (the rest of its
 /// settings as `s.rr`), to show how the gain depends on ε.
-pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<GeorgievReport, String> {
-    let setup = SceneSetup::load("corner").map_err(|e| e.to_string())?;
-    let camera = setup.camera.with_resolution(s.size).map_err(|e| e.to_string())?;
+pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<GeorgievReport, BenchError> {
+    let setup = SceneSetup::load("corner")?;
+    let camera = setup.camera.with_resolution(s.size)?;
     let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = Some(clamp);
@@ -170,26 +181,47 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
     }
     let mut md = String::new();
     let _ = writeln!(md, "# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n");
-    let _ = writeln!(md, "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer through the pixel centres, indirect, same clamp, {} spp; MSE is against it with its own variance ({:.3e}, from its per-pixel standard errors) subtracted. IR uses fresh light paths every frame. Seed {}.\n",
-        s.size.0, s.size.1, s.vpls, clamp.g_max, s.warmup_frames, s.frames, s.reference_spp, var, s.seed);
+    let _ = writeln!(
+        md,
+        "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer through the pixel centres, indirect, same clamp, {} spp; MSE is against it with its own variance ({:.3e}, from its per-pixel standard errors) subtracted. IR uses fresh light paths every frame. Seed {}.\n",
+        s.size.0, s.size.1, s.vpls, clamp.g_max, s.warmup_frames, s.frames, s.reference_spp, var, s.seed
+    );
     let _ = writeln!(md, "| method | stored VPLs | mean acceptance | MSE | ms / frame | efficiency 1/(MSE·s) |");
     let _ = writeln!(md, "| --- | --- | --- | --- | --- | --- |");
     let rr_name = format!("RR (eps {}, N_C {})", s.rr.epsilon, s.rr.camera_samples);
     for (name, f) in [("IR", ir), (rr_name.as_str(), rr)] {
         let _ = writeln!(md, "| {name} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.3e} |", f.stored, f.acceptance, f.mse, f.ms, f.efficiency());
     }
-    let _ = writeln!(md, "\n**Efficiency gain of RR over IR: {gain:.1}x** (paper: more than an order of magnitude). Mean acceptance on `corner`: {:.3} (paper: 0.07, i.e. 93 % discarded).\n", rr.acceptance);
+    let _ = writeln!(
+        md,
+        "\n**Efficiency gain of RR over IR: {gain:.1}x** (paper: more than an order of magnitude). Mean acceptance on `corner`: {:.3} (paper: 0.07, i.e. 93 % discarded).\n",
+        rr.acceptance
+    );
     if !swept.is_empty() {
-        let _ = writeln!(md, "RR with other values of epsilon (same frames and reference):\n\n| epsilon | stored VPLs | mean acceptance | MSE | ms / frame | gain over IR |\n| --- | --- | --- | --- | --- | --- |");
+        let _ = writeln!(
+            md,
+            "RR with other values of epsilon (same frames and reference):\n\n| epsilon | stored VPLs | mean acceptance | MSE | ms / frame | gain over IR |\n| --- | --- | --- | --- | --- | --- |"
+        );
         let mut rows: Vec<(f32, MethodFigures)> = swept.clone();
         rows.push((s.rr.epsilon, rr));
         rows.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (e, f) in rows {
-            let _ = writeln!(md, "| {e} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.1}x |", f.stored, f.acceptance, f.mse, f.ms, f.efficiency() / ir.efficiency());
+            let _ = writeln!(
+                md,
+                "| {e} | {:.0} | {:.3} | {:.3e} | {:.1} | {:.1}x |",
+                f.stored,
+                f.acceptance,
+                f.mse,
+                f.ms,
+                f.efficiency() / ir.efficiency()
+            );
         }
         let _ = writeln!(md);
     }
-    let _ = writeln!(md, "Mean acceptance probability of RR over the measured frames (same settings):\n\n| scene | mean acceptance | stored VPLs |\n| --- | --- | --- |");
+    let _ = writeln!(
+        md,
+        "Mean acceptance probability of RR over the measured frames (same settings):\n\n| scene | mean acceptance | stored VPLs |\n| --- | --- | --- |"
+    );
     for (scene, a, st) in &acc {
         let _ = writeln!(md, "| {scene} | {a:.3} | {st:.0} |");
     }
@@ -203,6 +235,9 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
             let _ = writeln!(csv, "{scene},rr,{},{st:.1},{a:.4},,", s.rr.epsilon);
         }
     }
-    let _ = writeln!(md, "\nPictures (indirect light, same exposure): the reference `corner_reference.png`, IR's last measured frame `corner_ir.png`, RR's `corner_rr.png`; EXRs beside them.\n\n![reference](corner_reference.png) ![IR](corner_ir.png) ![RR](corner_rr.png)");
+    let _ = writeln!(
+        md,
+        "\nPictures (indirect light, same exposure): the reference `corner_reference.png`, IR's last measured frame `corner_ir.png`, RR's `corner_rr.png`; EXRs beside them.\n\n![reference](corner_reference.png) ![IR](corner_ir.png) ![RR](corner_rr.png)"
+    );
     Ok(GeorgievReport { markdown: md, csv, reference, ir: ir_image, rr: rr_image })
 }

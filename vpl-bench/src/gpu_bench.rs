@@ -2,6 +2,7 @@
 //! per indirect frame of the GPU backend, SMC sampling with its rays and
 //! radiosity estimates on the GPU.
 
+use crate::error::BenchError;
 use crate::stages::median;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -61,22 +62,22 @@ pub struct GpuBenchRow {
 /// `start` at `size` with `vpls` SMC VPLs, 128² maps, 4×4 interleaved
 /// shading with the filter and G_max = I / A. Every step is waited for on
 /// the device, so the times add up.
-pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<GpuBenchRow, String> {
-    let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
+pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<GpuBenchRow, BenchError> {
+    let setup = SceneSetup::load(scene)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
-    crate::pipeline::GBufferStage::on(gpu.clone()).equip(&mut smc);
-    let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION).map_err(|e| e.to_string())?;
+    let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
+    let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?;
+    let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
     let mut rows: Vec<[f64; 14]> = Vec::new();
     let mut first = (0.0, 0);
     for k in 0..=frames {
         let f = (start + k).min(count - 1);
-        let (sc, camera) = setup.frame(f).map_err(|e| e.to_string())?;
-        let camera = camera.with_resolution(size).map_err(|e| e.to_string())?;
+        let (sc, camera) = setup.frame(f)?;
+        let camera = camera.with_resolution(size)?;
         let t_frame = Instant::now();
-        let gbuf = gpu.render_gbuffer(&sc, &camera).map_err(|e| e.to_string())?;
+        let gbuf = gpu.render_gbuffer(&sc, &camera)?;
         let (g_ms, g_read) = gpu.gbuffer_timings();
         let frame = Frame { scene: &sc, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let t0 = Instant::now();

@@ -14,21 +14,36 @@
 //! assert_eq!(c.pass_rate, 1.0);
 //! assert!((z_critical(0.01) - 2.576).abs() < 1e-3);
 //! ```
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
 pub mod cli;
-pub mod compare;
+pub mod error;
 pub mod figures;
 pub mod georgiev;
 #[cfg(feature = "gpu")]
 pub mod gpu_bench;
-pub mod metrics;
 pub mod pipeline;
 pub mod plot;
 pub mod progressive;
+pub mod stages;
 pub mod table1;
 pub mod table2;
-pub mod sequence;
-pub mod stages;
 pub mod validation;
+
+pub use vpl_render::{compare, metrics, sequence};

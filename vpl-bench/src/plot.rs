@@ -133,13 +133,23 @@ pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), P
                 for s in series {
                     let col = RGBColor(s.color.0, s.color.1, s.color.2);
                     let style = col.stroke_width(if s.bold { 3 } else { 2 });
-                    let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)).collect();
-                    c.draw_series(LineSeries::new(pts.clone(), style)).map_err(|e| draw(&e))?.label(s.label.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(3)));
+                    let pts: Vec<(f64, f64)> =
+                        s.points.iter().copied().filter(|p| (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)).collect();
+                    c.draw_series(LineSeries::new(pts.clone(), style))
+                        .map_err(|e| draw(&e))?
+                        .label(s.label.clone())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(3)));
                     if s.markers {
                         c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, col.filled()))).map_err(|e| draw(&e))?;
                     }
                 }
-                c.configure_series_labels().label_font(("sans-serif", 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::UpperRight).draw().map_err(|e| draw(&e))?;
+                c.configure_series_labels()
+                    .label_font(("sans-serif", 13))
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(|e| draw(&e))?;
             }};
         }
         match (log_x, log_y) {
@@ -163,9 +173,10 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("vpl-plot-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("c.png");
-        let s = Series { label: "a".into(), points: vec![(1.0, 2.0), (2.0, 3.0), (4.0, 1.0)], color: (200, 0, 0), bold: false, markers: true };
+        let s =
+            Series { label: "a".into(), points: vec![(1.0, 2.0), (2.0, 3.0), (4.0, 1.0)], color: (200, 0, 0), bold: false, markers: true };
         let c = Chart { title: "t", x_label: "x", y_label: "y", log: (true, true), size: (320, 240) };
-        line_chart(&p, &c, &[s.clone()]).unwrap();
+        line_chart(&p, &c, std::slice::from_ref(&s)).unwrap();
         let bytes = std::fs::read(&p).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
         // Some pixels are the series' colour: the line was drawn.

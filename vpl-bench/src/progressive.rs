@@ -10,13 +10,13 @@
 
 use crate::figures::exposure_for;
 use crate::metrics::{mse, reference_variance};
-use crate::plot::{line_chart, Chart, Series};
+use crate::plot::{Chart, Series, line_chart};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, CoreError, GeometryClamp, Image, Mode, Scene, SceneSetup};
-use vpl_pathtrace::{render, PathTracer, RenderSettings};
+use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_progressive::{Progressive, ProgressiveConfig};
 
 fn err(e: impl std::fmt::Display) -> CoreError {
@@ -74,7 +74,11 @@ fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), CoreEr
 /// Fig. 6's "inverse difference image scaled by 8": 1 − 8·|a − b| per
 /// channel, white where the images agree.
 pub fn inverse_difference(a: &Image, b: &Image, scale: f32) -> Image {
-    Image { width: a.width, height: a.height, data: a.data.iter().zip(&b.data).map(|(x, y)| (Vec3::ONE - (*x - *y).abs() * scale).max(Vec3::ZERO)).collect() }
+    Image {
+        width: a.width,
+        height: a.height,
+        data: a.data.iter().zip(&b.data).map(|(x, y)| (Vec3::ONE - (*x - *y).abs() * scale).max(Vec3::ZERO)).collect(),
+    }
 }
 
 /// Writes an image of values in [0, 1] as an 8-bit PNG as they are (no tone mapping).
@@ -177,7 +181,12 @@ pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig
         let k = r.passes();
         if k % s.step == 0 || k == s.passes {
             let img = r.image();
-            let p = Fig7Point { passes: k, seconds, rmse_converged: rmse_plain(&img, &converged, &mask), rmse_reference: rmse_masked(&img, &reference, &reference_se, &mask) };
+            let p = Fig7Point {
+                passes: k,
+                seconds,
+                rmse_converged: rmse_plain(&img, &converged, &mask),
+                rmse_reference: rmse_masked(&img, &reference, &reference_se, &mask),
+            };
             csv.push_str(&format!("{},{:.3},{:.6e},{:.6e}\n", p.passes, p.seconds, p.rmse_converged, p.rmse_reference));
             points.push(p);
             if snapshots.contains(&k) {
@@ -188,11 +197,28 @@ pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig
     }
     vpl_core::image::write_atomic(&dir.join("fig7.csv"), csv.as_bytes())?;
     let series = vec![
-        Series { label: "against the converged image".into(), points: points.iter().map(|p| (p.passes as f64, p.rmse_converged)).collect(), color: (0, 114, 178), bold: true, markers: false },
-        Series { label: "against the path tracer".into(), points: points.iter().map(|p| (p.passes as f64, p.rmse_reference)).collect(), color: (213, 94, 0), bold: false, markers: false },
+        Series {
+            label: "against the converged image".into(),
+            points: points.iter().map(|p| (p.passes as f64, p.rmse_converged)).collect(),
+            color: (0, 114, 178),
+            bold: true,
+            markers: false,
+        },
+        Series {
+            label: "against the path tracer".into(),
+            points: points.iter().map(|p| (p.passes as f64, p.rmse_reference)).collect(),
+            color: (213, 94, 0),
+            bold: false,
+            markers: false,
+        },
     ];
     let title = format!("Fig. 7: RMSE vs passes, {} {}x{}", s.scene, s.size.0, s.size.1);
-    line_chart(&dir.join("fig7.png"), &Chart { title: &title, x_label: "rendering passes", y_label: "RMSE", log: (false, false), size: (720, 440) }, &series).map_err(err)?;
+    line_chart(
+        &dir.join("fig7.png"),
+        &Chart { title: &title, x_label: "rendering passes", y_label: "RMSE", log: (false, false), size: (720, 440) },
+        &series,
+    )
+    .map_err(err)?;
     let fig = Fig7 {
         settings: s.clone(),
         passes_per_second: s.passes as f64 / seconds.max(1e-9),
@@ -279,7 +305,8 @@ pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn
     let clamp = GeometryClamp::for_budget(s.clamp_budget, scene.surface_area());
     let run = |clamp: Option<GeometryClamp>| -> Result<(Image, u64, f64), CoreError> {
         progress(&format!("{scene_name}: progressive ({}), {} s", if clamp.is_some() { "clamped" } else { "unclamped" }, s.seconds));
-        let mut r = Progressive::new(scene, camera.clone(), ProgressiveConfig { seed: s.seed, clamp, ..ProgressiveConfig::default() }).map_err(err)?;
+        let mut r = Progressive::new(scene, camera.clone(), ProgressiveConfig { seed: s.seed, clamp, ..ProgressiveConfig::default() })
+            .map_err(err)?;
         let t = Instant::now();
         while t.elapsed().as_secs_f64() < s.seconds {
             r.pass();

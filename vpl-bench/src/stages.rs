@@ -2,8 +2,8 @@
 
 use std::time::Instant;
 use vpl_core::{CoreError, GeometryClamp, IndirectShader, SceneSetup, Vpl, VplVisibility};
-use vpl_sampling::{InstantRadiosity, IrConfig};
-use vpl_shading::{direct_light, render_gbuffer, InterleavedShader};
+use vpl_sampling::{InstantRadiosity, IrConfig, Registry};
+use vpl_shading::{InterleavedShader, direct_light, render_gbuffer};
 use vpl_visibility::ShadowMaps;
 
 /// Median milliseconds per stage.
@@ -132,7 +132,15 @@ pub fn bench_smc(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: 
         rows.push([t.candidates_ms, t.resampling_ms, t.visibility_ms, t.radiosity_ms, t.knn_ms, t.total_ms, moved]);
     }
     let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
-    Ok(SmcBench { candidates: col(0), resampling: col(1), visibility: col(2), radiosity: col(3), knn: col(4), total: col(5), moved: col(6) })
+    Ok(SmcBench {
+        candidates: col(0),
+        resampling: col(1),
+        visibility: col(2),
+        radiosity: col(3),
+        knn: col(4),
+        total: col(5),
+        moved: col(6),
+    })
 }
 
 /// One sampler's cost per frame ([`bench_samplers`]).
@@ -150,24 +158,35 @@ pub struct SamplerBench {
     pub stored: f64,
 }
 
-/// Every sampler of the registry on `name`'s sequence from frame `start`
+/// Every sampler of `registry` on `name`'s sequence from frame `start`
 /// (the camera walking one frame at a time): `next_frame` time of the first
 /// frame, and the median over the next `repeat` frames. RR reads its own
 /// estimate of the image (no images are rendered here); IR draws fresh paths.
-pub fn bench_samplers(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: u32) -> Result<Vec<SamplerBench>, CoreError> {
+pub fn bench_samplers(
+    registry: &Registry,
+    name: &str,
+    size: (u32, u32),
+    vpls: usize,
+    start: u32,
+    repeat: u32,
+) -> Result<Vec<SamplerBench>, CoreError> {
     let setup = SceneSetup::load(name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let gbuf = vpl_core::GBuffer::empty();
     let mut out = Vec::new();
-    for entry in vpl_sampling::SAMPLERS {
-        let config = vpl_sampling::SamplerConfig { vpls, fresh_paths: true, ..vpl_sampling::SamplerConfig::default() };
-        let mut s = (entry.build)(&config).map_err(|e| CoreError::Invalid(e.to_string()))?;
+    let mut params = vpl_core::Params::new();
+    params.offer("fresh-paths", true);
+    for entry in registry.entries() {
+        let mut s = registry
+            .build(&entry.name, vpl_core::Budget::new(vpls, 5), &vpl_core::Services::cpu(), &params)
+            .map_err(|e| CoreError::Invalid(e.to_string()))?;
         let mut rows: Vec<[f64; 3]> = Vec::new();
         let mut first_ms = 0.0;
         for f in 0..=repeat {
             let (scene, camera) = setup.frame((start + f).min(count - 1))?;
             let camera = camera.with_resolution(size)?;
-            let frame = vpl_core::Frame { scene: &scene, camera: &camera, time: 0.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
+            let frame =
+                vpl_core::Frame { scene: &scene, camera: &camera, time: 0.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
             let t = std::time::Instant::now();
             let set = s.next_frame(&frame);
             let ms = t.elapsed().as_secs_f64() * 1e3;
@@ -178,7 +197,7 @@ pub fn bench_samplers(name: &str, size: (u32, u32), vpls: usize, start: u32, rep
             }
         }
         let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
-        out.push(SamplerBench { name: entry.name.to_string(), first_ms, frame_ms: col(0), moved: col(1), stored: col(2) });
+        out.push(SamplerBench { name: entry.name.clone(), first_ms, frame_ms: col(0), moved: col(1), stored: col(2) });
     }
     Ok(out)
 }

@@ -1,13 +1,14 @@
 //! Table 2 of Hedman et al.: milliseconds per stage of an SMC frame, per
 //! scene, in the paper's columns (`vpl table2`).
 
+use crate::error::BenchError;
+use crate::pipeline::{BackendKind, ShadingSpec, VisibilitySpec};
 use crate::stages::median;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 use vpl_core::image::write_atomic;
-use crate::pipeline::{Backend, ShadingSpec, Stages, VisibilitySpec};
-use vpl_core::{CoreError, Frame, GBuffer, GeometryClamp, SceneSetup, VplSampler};
+use vpl_core::{Budget, CoreError, Frame, GBuffer, GeometryClamp, SceneSetup, VplSampler};
 use vpl_sampling::{SmcConfig, SmcSampler};
 
 /// The paper's Table 2 rows: scene, its stand-in here, triangles, VPLs, then
@@ -20,8 +21,18 @@ pub const PAPER: [(&str, &str, &str, usize, [f64; 10]); 4] = [
 ];
 
 /// Column names of Table 2.
-pub const COLUMNS: [&str; 10] =
-    ["cand. sampling", "cand. resampling", "indirect visibility", "radiosity", "kNN", "sampling total", "shadow maps", "interl. shading", "rendering total", "total"];
+pub const COLUMNS: [&str; 10] = [
+    "cand. sampling",
+    "cand. resampling",
+    "indirect visibility",
+    "radiosity",
+    "kNN",
+    "sampling total",
+    "shadow maps",
+    "interl. shading",
+    "rendering total",
+    "total",
+];
 
 /// One scene's medians in milliseconds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -80,24 +91,34 @@ impl Table2Row {
 /// `size` with budget `vpls` (after the first frame, whose warm-up and
 /// full set of shadow maps are not timed): the sampler's steps, the shadow
 /// maps of moved VPLs (128²) and interleaved shading with the filter.
-pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32, backend: Backend) -> Result<(Table2Row, Option<String>), String> {
-    let setup = SceneSetup::load(scene_name).map_err(|e| e.to_string())?;
+pub fn time_scene(
+    scene_name: &str,
+    paper_scene: &str,
+    size: (u32, u32),
+    vpls: usize,
+    start: u32,
+    frames: u32,
+    backend: BackendKind,
+) -> Result<(Table2Row, Option<String>), BenchError> {
+    let setup = SceneSetup::load(scene_name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    let mut smc = SmcSampler::new(SmcConfig { vpls, ..SmcConfig::default() }).map_err(|e| e.to_string())?;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
-    let Stages { gbuffer: gstage, visibility: mut sm, mut shader } =
-        Stages::new(backend, VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), ShadingSpec::Interleaved { filter: true }, Some(clamp), 0, vpls)?;
-    gstage.equip(&mut smc);
-    gstage.fits(size)?;
+    let backend = backend.instantiate()?;
+    let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &backend.services())?;
+    let budget = Budget::new(vpls, 5);
+    let mut sm = backend.visibility(VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), &budget)?;
+    let mut shader = backend.shader(ShadingSpec::Interleaved { filter: true }, Some(clamp), 0)?;
+    backend.check_size(size)?;
     let mut rows: Vec<[f64; 9]> = Vec::new();
     for k in 0..=frames {
         let f = (start + k).min(count - 1);
-        let (scene, camera) = setup.frame(f).map_err(|e| e.to_string())?;
-        let camera = camera.with_resolution(size).map_err(|e| e.to_string())?;
+        let (scene, camera) = setup.frame(f)?;
+        let camera = camera.with_resolution(size)?;
         let t0 = std::time::Instant::now();
-        let gbuf: GBuffer = gstage.render(&scene, &camera);
+        let gbuf: GBuffer = backend.gbuffer(&scene, &camera)?;
         let gbuffer_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let frame = Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
+        let frame =
+            Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let set = smc.next_frame(&frame).clone();
         let st = smc.timings();
         let t0 = std::time::Instant::now();
@@ -107,7 +128,17 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
         std::hint::black_box(shader.shade(&gbuf, &set, sm.as_ref()));
         let shade_ms = t0.elapsed().as_secs_f64() * 1e3 + gbuffer_ms;
         if k > 0 {
-            rows.push([st.candidates_ms, st.resampling_ms, st.visibility_ms, st.radiosity_ms, st.knn_ms, st.total_ms, sm_ms, shade_ms, set.moved_count() as f64]);
+            rows.push([
+                st.candidates_ms,
+                st.resampling_ms,
+                st.visibility_ms,
+                st.radiosity_ms,
+                st.knn_ms,
+                st.total_ms,
+                sm_ms,
+                shade_ms,
+                set.moved_count() as f64,
+            ]);
         }
     }
     let col = |i: usize| median(rows.iter().map(|r| r[i]).collect());
@@ -129,7 +160,7 @@ pub fn time_scene(scene_name: &str, paper_scene: &str, size: (u32, u32), vpls: u
         total: sampling + maps + shading,
         moved: col(8),
     };
-    Ok((row, gstage.adapter()))
+    Ok((row, backend.device()))
 }
 
 /// Writes `table2.md`, `table2.csv` and `table2.json` into `dir`.

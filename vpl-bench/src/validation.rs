@@ -4,10 +4,10 @@
 //! in `tests/data/cornell-box/`. For each mode (full d5, direct d2, indirect
 //! d5 − d2) the toolkit renders `cornell` and compares with [`compare`].
 
-use crate::compare::{compare, difference, Comparison};
+use crate::compare::{Comparison, compare, difference};
 use std::path::Path;
 use vpl_core::{CoreError, Image, SceneSetup};
-use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
+use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 
 /// One mode's validation result.
 #[derive(Clone, Debug)]
@@ -36,7 +36,12 @@ pub const MODES: [(&str, Mode, u32, &str); 3] = [
 /// Renders `cornell` at `spp` in the three modes and compares with the
 /// references in `data_dir`. `progress(mode, pixels_done, pixels_total)` is
 /// called as the renders advance.
-pub fn validate_cornell(data_dir: &Path, spp: u32, seed: u64, progress: &(dyn Fn(&str, u64, u64) + Sync)) -> Result<Vec<ModeValidation>, CoreError> {
+pub fn validate_cornell(
+    data_dir: &Path,
+    spp: u32,
+    seed: u64,
+    progress: &(dyn Fn(&str, u64, u64) + Sync),
+) -> Result<Vec<ModeValidation>, CoreError> {
     let setup = SceneSetup::load("cornell")?;
     let mut out = Vec::new();
     for (name, mode, depth, stem) in MODES {
@@ -46,7 +51,14 @@ pub fn validate_cornell(data_dir: &Path, spp: u32, seed: u64, progress: &(dyn Fn
         let r = render(&setup.scene, &setup.camera, &pt, RenderSettings { spp, seed, frame: 0 }, &|d, t| progress(name, d, t))
             .map_err(|e| CoreError::Invalid(e.to_string()))?;
         let comparison = compare(&r.image, &r.stderr, &reference, &reference_se, 0.01)?;
-        out.push(ModeValidation { mode: name, reference: stem, comparison, ours: (r.image, r.stderr), theirs: (reference, reference_se), seconds: r.seconds });
+        out.push(ModeValidation {
+            mode: name,
+            reference: stem,
+            comparison,
+            ours: (r.image, r.stderr),
+            theirs: (reference, reference_se),
+            seconds: r.seconds,
+        });
     }
     Ok(out)
 }
@@ -80,8 +92,20 @@ pub fn report_markdown(vs: &[ModeValidation], spp: u32) -> String {
         let c = &v.comparison;
         s.push_str(&format!(
             "| {} | `{}` | {:.2} % | {:.6}, {:.6}, {:.6} | {:.6}, {:.6}, {:.6} | {:+.2}, {:+.2}, {:+.2} | {:.2e} | {:.1} |\n",
-            v.mode, v.reference, 100.0 * c.pass_rate, c.mean_a[0], c.mean_a[1], c.mean_a[2], c.mean_b[0], c.mean_b[1], c.mean_b[2],
-            c.mean_z[0], c.mean_z[1], c.mean_z[2], c.rel_mse, v.seconds
+            v.mode,
+            v.reference,
+            100.0 * c.pass_rate,
+            c.mean_a[0],
+            c.mean_a[1],
+            c.mean_a[2],
+            c.mean_b[0],
+            c.mean_b[1],
+            c.mean_b[2],
+            c.mean_z[0],
+            c.mean_z[1],
+            c.mean_z[2],
+            c.rel_mse,
+            v.seconds
         ));
     }
     s.push_str("\nPass criteria (tests/tests/mitsuba.rs): ≥ 99 % of pixels pass and |mean difference| ≤ 4 σ in every channel.\n");

@@ -10,14 +10,15 @@
 //! Without an adapter the test says it skipped, unless VPL_REQUIRE_GPU=1.
 #![cfg(feature = "gpu")]
 
-use vpl_bench::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
-use vpl_core::{GeometryClamp, Mode, SceneSetup};
-use vpl_sampling::SamplerConfig;
+use vpl_bench::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
+use vpl_core::{Budget, GeometryClamp, Mode, Params, SceneSetup};
+use vpl_sampling::Registry;
 
-fn spec(sampler: &str, backend: Backend, visibility: VisibilitySpec, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
+fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
     PipelineSpec {
         sampler: sampler.into(),
-        config: SamplerConfig { vpls, max_depth: 5, ..SamplerConfig::default() },
+        params: Params::new(),
+        budget: Budget::new(vpls, 5),
         visibility,
         shading: ShadingSpec::Interleaved { filter: true },
         clamp: Some(clamp),
@@ -34,7 +35,8 @@ fn gpu_backend_renders_the_cpu_backends_frames() {
     let vpls = 256;
     let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
     for (sampler, vis) in [("smc", VisibilitySpec::ShadowMaps(64)), ("ir", VisibilitySpec::RayTraced)] {
-        let mut gpu = match Pipeline::new(spec(sampler, Backend::Gpu, vis, vpls, clamp)) {
+        let registry = Registry::builtin();
+        let mut gpu = match spec(sampler, BackendKind::Gpu, vis, vpls, clamp).build(&registry, &setup.scene) {
             Ok(p) => p,
             Err(e) if std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("VPL_REQUIRE_GPU=1 but {e}"),
             Err(e) => {
@@ -42,13 +44,13 @@ fn gpu_backend_renders_the_cpu_backends_frames() {
                 return;
             }
         };
-        eprintln!("adapter: {}", gpu.adapter().unwrap());
-        let mut cpu = Pipeline::new(spec(sampler, Backend::Cpu, vis, vpls, clamp)).unwrap();
+        eprintln!("adapter: {}", gpu.backend().device().unwrap());
+        let mut cpu = spec(sampler, BackendKind::Cpu, vis, vpls, clamp).build(&registry, &setup.scene).unwrap();
         for f in 0..3u32 {
             let (scene, camera) = setup.frame(f * 10).unwrap();
             let camera = camera.with_resolution((96, 54)).unwrap();
-            let a = cpu.render(&scene, &camera, f as u64, f as f32 / 3.0);
-            let b = gpu.render(&scene, &camera, f as u64, f as f32 / 3.0);
+            let a = cpu.render(&scene, &camera, f as u64, f as f32 / 3.0).unwrap();
+            let b = gpu.render(&scene, &camera, f as u64, f as f32 / 3.0).unwrap();
             assert_eq!(a.moved, b.moved, "{sampler} frame {f}: VPLs moved");
             let (mut num, mut den) = (0.0f64, 0.0f64);
             for (x, y) in a.image.data.iter().zip(&b.image.data) {

@@ -33,7 +33,8 @@ fn fails(dir: &Path, args: &[&str], needle: &str) {
     assert!(lines[0].starts_with("vpl: error: ") && lines[0].contains(needle), "{args:?}: {:?} lacks {needle:?}", lines[0]);
     assert!(!err.contains("panicked"), "{args:?}: {err}");
     assert!(!out.exists() && !dir.join("out.png").exists(), "{args:?}: output written");
-    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).collect();
+    let leftovers: Vec<_> =
+        std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).collect();
     assert!(leftovers.is_empty(), "{args:?}: temporary files left");
 }
 
@@ -67,6 +68,11 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--clamp", "-3"], "clamp");
     fails(&d, &["--scene", "cornell", "--threads", "0"], "threads");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "rr", "--rr-epsilon", "0"], "--rr-epsilon");
+    // A flag the chosen sampler does not read is refused, not ignored; so is an unknown `--set` key.
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "ir", "--m-max", "4"], "--sampler ir does not read --m-max");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--set", "no-such-key=1"], "does not read --no-such-key");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--set", "knn-k"], "--set knn-k: expected KEY=VALUE");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--set", "knn-k=x"], "--knn-k x: expected");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "tcas", "--rsm-res", "0"], "--rsm-res");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "mir", "--mh-iterations", "0"], "--mh-iterations");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--sampler", "smc", "--resample-ratio", "0"], "resample-ratio");
@@ -92,7 +98,13 @@ fn unwritable_output_is_an_error_before_rendering() {
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(err.contains("cannot write"), "{err}");
     }
-    let o = vpl().args(["render", "--scene", "cornell", "--spp", "1", "--size", "8x8", "--out"]).arg(d.join("a.exr")).arg("--stderr").arg(d.join("none/se.exr")).output().unwrap();
+    let o = vpl()
+        .args(["render", "--scene", "cornell", "--spp", "1", "--size", "8x8", "--out"])
+        .arg(d.join("a.exr"))
+        .arg("--stderr")
+        .arg(d.join("none/se.exr"))
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(!d.join("a.exr").exists(), "nothing written when any output is unwritable");
 }
@@ -102,7 +114,13 @@ fn render_writes_exr_png_and_stderr() {
     let d = scratch("good");
     let out = d.join("c.exr");
     let se = d.join("c_se.exr");
-    let o = vpl().args(["render", "--scene", "cornell", "--spp", "4", "--size", "32x32", "--mode", "indirect", "--threads", "2", "--out"]).arg(&out).arg("--stderr").arg(&se).output().unwrap();
+    let o = vpl()
+        .args(["render", "--scene", "cornell", "--spp", "4", "--size", "32x32", "--mode", "indirect", "--threads", "2", "--out"])
+        .arg(&out)
+        .arg("--stderr")
+        .arg(&se)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = vpl_core::Image::read_exr(&out).unwrap();
     assert_eq!((img.width, img.height), (32, 32));
@@ -120,7 +138,11 @@ fn export_scene_round_trips_through_render() {
         let text = String::from_utf8(o.stdout).unwrap();
         assert!(text.contains(&format!("builtin = \"{name}\"")), "{text}");
         let toml = write(&d, &format!("{name}.toml"), &text);
-        let r = vpl().args(["render", "--scene", &toml, "--spp", "1", "--size", "8x8", "--quiet", "--out"]).arg(d.join(format!("{name}.exr"))).output().unwrap();
+        let r = vpl()
+            .args(["render", "--scene", &toml, "--spp", "1", "--size", "8x8", "--quiet", "--out"])
+            .arg(d.join(format!("{name}.exr")))
+            .output()
+            .unwrap();
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     }
 }
@@ -147,7 +169,24 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
     for (vis, shading) in [("shadowmap", "interleaved"), ("raytrace", "exhaustive")] {
         let out = d.join(format!("{vis}.exr"));
         let o = vpl()
-            .args(["render", "--scene", "cornell", "--method", "vpl", "--vpls", "256", "--size", "32x32", "--visibility", vis, "--shading", shading, "--shadowmap-res", "32", "--out"])
+            .args([
+                "render",
+                "--scene",
+                "cornell",
+                "--method",
+                "vpl",
+                "--vpls",
+                "256",
+                "--size",
+                "32x32",
+                "--visibility",
+                vis,
+                "--shading",
+                shading,
+                "--shadowmap-res",
+                "32",
+                "--out",
+            ])
             .arg(&out)
             .output()
             .unwrap();
@@ -168,7 +207,27 @@ fn sequence_writes_frames_and_csvs() {
     let d = scratch("sequence");
     let out = d.join("run");
     let o = vpl()
-        .args(["sequence", "--scene", "office", "--sampler", "smc", "--vpls", "128", "--warmup", "3", "--m-max", "5", "--frames", "10..13", "--size", "32x18", "--shadowmap-res", "16", "--quiet", "--out"])
+        .args([
+            "sequence",
+            "--scene",
+            "office",
+            "--sampler",
+            "smc",
+            "--vpls",
+            "128",
+            "--warmup",
+            "3",
+            "--m-max",
+            "5",
+            "--frames",
+            "10..13",
+            "--size",
+            "32x18",
+            "--shadowmap-res",
+            "16",
+            "--quiet",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
@@ -182,7 +241,9 @@ fn sequence_writes_frames_and_csvs() {
     let moved: Vec<usize> = frames.lines().skip(1).map(|l| l.split(',').nth(8).unwrap().parse().unwrap()).collect();
     assert_eq!(moved.len(), 3);
     assert!(moved[1..].iter().all(|&m| m <= 5), "{moved:?}");
-    for (args, needle) in [(vec!["--frames", "9000.."], "does not fit"), (vec!["--frames", "5..2"], "frames"), (vec!["--frame", "3"], "--frames")] {
+    for (args, needle) in
+        [(vec!["--frames", "9000.."], "does not fit"), (vec!["--frames", "5..2"], "frames"), (vec!["--frame", "3"], "--frames")]
+    {
         let o = vpl().args(["sequence", "--scene", "office", "--size", "8x8", "--out"]).arg(d.join("bad")).args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
@@ -275,7 +336,10 @@ fn progressive_refuses_bad_input_in_one_line() {
         (vec!["--scene", "cornell", "--method", "progressive", "--cull-accept", "0"], "--cull-accept"),
         (vec!["--scene", "cornell", "--method", "progressive", "--lens-radius", "-0.1"], "--lens-radius"),
         (vec!["--scene", "cornell", "--method", "progressive", "--snapshot-every", "4"], "go together"),
-        (vec!["--scene", "cornell", "--method", "progressive", "--snapshot-every", "0", "--snapshots", &snaps], "--snapshot-every must be at least 1"),
+        (
+            vec!["--scene", "cornell", "--method", "progressive", "--snapshot-every", "0", "--snapshots", &snaps],
+            "--snapshot-every must be at least 1",
+        ),
         (vec!["--scene", "cornell", "--method", "progressive", "--mode", "indirect"], "--techniques"),
         (vec!["--scene", "cornell", "--method", "progressive", "--max-depth", "0"], "--max-depth"),
     ] {
@@ -293,7 +357,24 @@ fn progressive_renders_passes_and_snapshots() {
     let se = dir.join("g_se.exr");
     let snaps = dir.join("snaps");
     let o = vpl()
-        .args(["render", "--scene", "glass", "--method", "progressive", "--passes", "4", "--caustic-paths", "2000", "--size", "24x18", "--snapshot-every", "2", "--threads", "2", "--out"])
+        .args([
+            "render",
+            "--scene",
+            "glass",
+            "--method",
+            "progressive",
+            "--passes",
+            "4",
+            "--caustic-paths",
+            "2000",
+            "--size",
+            "24x18",
+            "--snapshot-every",
+            "2",
+            "--threads",
+            "2",
+            "--out",
+        ])
         .arg(&out)
         .arg("--stderr")
         .arg(&se)
@@ -313,7 +394,11 @@ fn progressive_renders_passes_and_snapshots() {
         assert!(snaps.join(format!("pass_{k:06}.exr")).exists(), "snapshot {k}");
     }
     // A time budget alone: at least one pass.
-    let o = vpl().args(["render", "--scene", "cornell", "--method", "progressive", "--seconds", "0.2", "--size", "16x16", "--quiet", "--out"]).arg(dir.join("c.exr")).output().unwrap();
+    let o = vpl()
+        .args(["render", "--scene", "cornell", "--method", "progressive", "--seconds", "0.2", "--size", "16x16", "--quiet", "--out"])
+        .arg(dir.join("c.exr"))
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(vpl_core::Image::read_exr(dir.join("c.exr")).unwrap().mean()[0] > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use vpl_bench::table1::{self, RowRun, Shard, Table1Error, Table1Spec};
+use vpl_sampling::Registry;
 
 fn tiny() -> Table1Spec {
     Table1Spec {
@@ -14,7 +15,7 @@ fn tiny() -> Table1Spec {
         max_depth: 5,
         shadow_map_res: 32,
         seed: 3,
-        backend: vpl_bench::pipeline::Backend::Cpu,
+        backend: vpl_bench::pipeline::BackendKind::Cpu,
     }
 }
 
@@ -31,9 +32,10 @@ fn read(dir: &Path, f: &str) -> String {
 
 #[test]
 fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
+    let reg = Registry::builtin();
     let spec = tiny();
     let whole = fresh("whole");
-    let s = table1::run(&spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
+    let s = table1::run(&reg, &spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
     assert_eq!((s.ran, s.kept, s.total_units), (5, 0, 5));
     let r = table1::merge(&whole).unwrap();
     let row = &r.rows[0];
@@ -51,14 +53,14 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     assert!(whole.join("fig7_maze.png").exists());
 
     // A second call finds every unit done and keeps it.
-    let again = table1::run(&spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
+    let again = table1::run(&reg, &spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
     assert_eq!((again.ran, again.kept), (0, 5));
 
     let split = fresh("split");
-    let a = table1::run(&spec, &split, Shard { index: 0, count: 2 }, &mut |_| {}).unwrap();
+    let a = table1::run(&reg, &spec, &split, Shard { index: 0, count: 2 }, &mut |_| {}).unwrap();
     // Half the units are missing before the second shard runs.
     assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 2, total: 5, .. })));
-    let b = table1::run(&spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
+    let b = table1::run(&reg, &spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
     assert_eq!((a.ran, b.ran), (3, 2));
     table1::merge(&split).unwrap();
     for f in ["table1.json", "table1.md", "table1.csv", "fig7.csv"] {
@@ -67,7 +69,7 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
 
     // Another spec into the same folder is refused.
     let other = Table1Spec { seed: 4, ..spec };
-    assert!(matches!(table1::run(&other, &split, Shard::ALL, &mut |_| {}), Err(Table1Error::SpecMismatch(..))));
+    assert!(matches!(table1::run(&reg, &other, &split, Shard::ALL, &mut |_| {}), Err(Table1Error::SpecMismatch(..))));
     std::fs::remove_dir_all(&whole).unwrap();
     std::fs::remove_dir_all(&split).unwrap();
 }
@@ -76,13 +78,13 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
 fn specs_and_shards_are_checked() {
     let mut s = tiny();
     s.rows[0].end = 100_000;
-    assert!(s.validate().unwrap_err().to_string().contains("do not fit maze"));
+    assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("do not fit maze"));
     let mut s = tiny();
     s.methods = vec!["nope".into()];
-    assert!(s.validate().unwrap_err().to_string().contains("unknown method 'nope'"));
+    assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("unknown method 'nope'"));
     let mut s = tiny();
     s.rows[0].id = "sponza".into();
-    assert!(s.validate().unwrap_err().to_string().contains("unknown sequence"));
+    assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("unknown sequence"));
     assert!("1/2".parse::<Shard>().is_ok());
     for bad in ["2/2", "1", "a/b", "0/0"] {
         assert!(bad.parse::<Shard>().is_err(), "{bad}");
@@ -94,6 +96,6 @@ fn specs_and_shards_are_checked() {
     }
     // The quick profile's windows hold the paper's five rows.
     let q = Table1Spec::quick();
-    q.validate().unwrap();
+    q.validate(&Registry::builtin()).unwrap();
     assert_eq!(q.rows.iter().map(|r| r.id.as_str()).collect::<Vec<_>>(), ["office", "courtyard", "maze", "atrium", "courtyard-sun"]);
 }

@@ -205,7 +205,15 @@ pub struct Scatter {
 /// `None` where the path ends: an opaque surface of a one-sided scene seen
 /// from behind, or a black layer.
 #[inline]
-pub fn scatter(scene: &Scene, sp: SurfacePoint, w: Vec3, spectral: bool, lambda: &mut Option<f32>, beta: &mut Vec3, rng: &mut RngStream) -> Option<Scatter> {
+pub fn scatter(
+    scene: &Scene,
+    sp: SurfacePoint,
+    w: Vec3,
+    spectral: bool,
+    lambda: &mut Option<f32>,
+    beta: &mut Vec3,
+    rng: &mut RngStream,
+) -> Option<Scatter> {
     let m = scene.material(&sp);
     let layered = m.layered.as_ref();
     let transmissive = layered.is_some_and(|l| l.transmission > 0.0);
@@ -370,7 +378,7 @@ impl Layer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{stream, Purpose};
+    use crate::rng::{Purpose, stream};
 
     fn point() -> SurfacePoint {
         SurfacePoint { p: Vec3::ZERO, ng: Vec3::Z, n: Vec3::Z, triangle: 0, material: 0 }
@@ -386,7 +394,14 @@ mod tests {
     fn sample_weight_matches_eval_over_pdf() {
         let sp = point();
         let wo = Vec3::new(0.4, -0.2, 0.8).normalize();
-        for (kind, kappa) in [(LayerKind::Base, 0.0), (LayerKind::Reflection, 0.05), (LayerKind::Reflection, 0.15), (LayerKind::Reflection, 0.5), (LayerKind::Transmission, 0.0), (LayerKind::Transmission, 0.3)] {
+        for (kind, kappa) in [
+            (LayerKind::Base, 0.0),
+            (LayerKind::Reflection, 0.05),
+            (LayerKind::Reflection, 0.15),
+            (LayerKind::Reflection, 0.5),
+            (LayerKind::Transmission, 0.0),
+            (LayerKind::Transmission, 0.3),
+        ] {
             let l = layer(kind, kappa);
             let mut rng = stream(1, 0, Purpose::TEST, 0);
             for _ in 0..2000 {
@@ -396,7 +411,11 @@ mod tests {
                 assert!((pdf - s.pdf).abs() <= 1e-3 * pdf.max(1.0), "{kind:?} κ={kappa}: pdf {pdf} vs {}", s.pdf);
                 let f = l.eval(&sp, wo, s.w, 1.5);
                 let w = f * s.w.dot(sp.n).abs() / s.pdf;
-                assert!((w - s.weight).abs().max_element() <= 2e-3 * s.weight.max_element().max(1.0), "{kind:?} κ={kappa}: {w} vs {}", s.weight);
+                assert!(
+                    (w - s.weight).abs().max_element() <= 2e-3 * s.weight.max_element().max(1.0),
+                    "{kind:?} κ={kappa}: {w} vs {}",
+                    s.weight
+                );
             }
         }
     }
@@ -408,7 +427,12 @@ mod tests {
         let sp = point();
         let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
         let n = 200_000;
-        for (kind, kappa, exact) in [(LayerKind::Base, 0.0, Some(1.0)), (LayerKind::Transmission, 0.0, Some(1.0)), (LayerKind::Reflection, 0.1, None), (LayerKind::Reflection, 0.19, None)] {
+        for (kind, kappa, exact) in [
+            (LayerKind::Base, 0.0, Some(1.0)),
+            (LayerKind::Transmission, 0.0, Some(1.0)),
+            (LayerKind::Reflection, 0.1, None),
+            (LayerKind::Reflection, 0.19, None),
+        ] {
             let l = layer(kind, kappa);
             let mut rng = stream(2, 0, Purpose::TEST, 1);
             let mut sum = 0.0f64;

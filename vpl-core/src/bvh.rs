@@ -2,9 +2,9 @@
 //! with triangle tests by precomputed affine transforms.
 
 use crate::ray::Ray;
-use crate::scene::TriangleData;
+use crate::triangle::TriangleData;
 use glam::{Vec3A, Vec4};
-use obvhs::{cwbvh::CwBvh, ray::RayHit, triangle::Triangle, BvhBuildParams};
+use obvhs::{BvhBuildParams, cwbvh::CwBvh, ray::RayHit, triangle::Triangle};
 use std::time::Duration;
 
 /// A triangle prepared for ray tests (Baldwin & Weber, "Fast Ray-Triangle
@@ -38,11 +38,7 @@ impl PreparedTriangle {
         let r0 = inv.row(0);
         let r1 = inv.row(1);
         let r2 = inv.row(2);
-        PreparedTriangle {
-            row0: r0.extend(-r0.dot(p0)),
-            row1: r1.extend(-r1.dot(p0)),
-            row2: r2.extend(-r2.dot(p0)),
-        }
+        PreparedTriangle { row0: r0.extend(-r0.dot(p0)), row1: r1.extend(-r1.dot(p0)), row2: r2.extend(-r2.dot(p0)) }
     }
 
     /// Ray parameter of the hit in `[0, t_max]`, or infinity.
@@ -80,10 +76,8 @@ impl Bvh {
     /// reinsertion (obvhs's "slow" preset; measured fastest to trace on the
     /// Cornell box), at most 3 triangles per leaf.
     pub fn build(triangles: &[TriangleData]) -> Bvh {
-        let tris: Vec<Triangle> = triangles
-            .iter()
-            .map(|t| Triangle { v0: t.p0.into(), v1: (t.p0 + t.e1).into(), v2: (t.p0 + t.e2).into() })
-            .collect();
+        let tris: Vec<Triangle> =
+            triangles.iter().map(|t| Triangle { v0: t.p0.into(), v1: (t.p0 + t.e1).into(), v2: (t.p0 + t.e2).into() }).collect();
         let mut params = BvhBuildParams::slow_build();
         params.max_prims_per_leaf = 3;
         let cwbvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&tris, params, &mut Duration::default());

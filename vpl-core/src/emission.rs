@@ -41,6 +41,7 @@ impl Scene {
     /// weight's mean over uniform `u_pos`, `u_dir` is the power of light `i`
     /// alone. Reflective shadow maps index it by (`u_pos`, `u_dir`).
     /// `None` when the sample carries nothing or `i` is out of range.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     pub fn emit_from(&self, i: usize, u_pos: (f32, f32), u_dir: (f32, f32)) -> Option<EmittedRay> {
         let (ray, beta) = match self.lights.get(i)? {
             Light::Area { triangle, radiance } => {
@@ -82,7 +83,7 @@ impl Scene {
 
 #[cfg(test)]
 mod tests {
-    use crate::light::{channel_mean, Light};
+    use crate::light::{Light, channel_mean};
     use crate::material::Material;
     use crate::mesh::Mesh;
     use crate::scene::Scene;

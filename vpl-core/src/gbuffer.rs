@@ -26,8 +26,15 @@ pub struct GSample {
 
 impl GSample {
     /// A camera ray that hit nothing.
-    pub const MISS: GSample =
-        GSample { p: Vec3::ZERO, n: Vec3::Z, ng: Vec3::Z, albedo: Vec3::ZERO, emitted: Vec3::ZERO, material: u32::MAX, depth: f32::INFINITY };
+    pub const MISS: GSample = GSample {
+        p: Vec3::ZERO,
+        n: Vec3::Z,
+        ng: Vec3::Z,
+        albedo: Vec3::ZERO,
+        emitted: Vec3::ZERO,
+        material: u32::MAX,
+        depth: f32::INFINITY,
+    };
 
     /// Whether the camera ray hit a surface.
     #[inline]

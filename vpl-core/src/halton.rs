@@ -1,7 +1,7 @@
 //! The Halton sequence with a Cranley–Patterson rotation per dimension.
 
+use crate::rng::{Purpose, stream};
 use crate::sampling::radical_inverse;
-use crate::rng::{stream, Purpose};
 
 /// Halton points in `dims` dimensions (prime bases 2, 3, 5, …), each
 /// dimension shifted modulo 1 by a random offset drawn from the seed, so

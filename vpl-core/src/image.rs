@@ -46,6 +46,7 @@ impl Image {
         [s[0] / n, s[1] / n, s[2] / n]
     }
 
+    #[cfg(feature = "formats")]
     /// Reads the RGB channels of the first layer of an OpenEXR file.
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Image> {
         use exr::prelude::*;
@@ -67,6 +68,7 @@ impl Image {
         Ok(img.layer_data.channel_data.pixels)
     }
 
+    #[cfg(feature = "formats")]
     /// Writes a 32-bit float RGB OpenEXR file, atomically.
     pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
         use exr::prelude::*;
@@ -89,6 +91,7 @@ impl Image {
         write_atomic(path, &bytes.into_inner())
     }
 
+    #[cfg(feature = "formats")]
     /// Writes an 8-bit sRGB PNG of the Reinhard-tone-mapped image, atomically.
     /// `exposure` scales radiance before tone mapping.
     pub fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> Result<()> {
@@ -102,6 +105,7 @@ impl Image {
     }
 }
 
+#[cfg(feature = "formats")]
 /// Writes 8-bit RGB pixels (row-major, 3 bytes a pixel) as a PNG, atomically.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     let err = |e: png::EncodingError| CoreError::Write { path: path.into(), reason: e.to_string() };
@@ -176,6 +180,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[cfg(feature = "formats")]
     fn exr_round_trip_is_exact() {
         let dir = std::env::temp_dir().join(format!("vpl-core-img-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

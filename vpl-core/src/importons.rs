@@ -71,6 +71,7 @@ impl Importons {
 
     /// [`Importons::contribution`] with the squared distance in G at least `min_d2`.
     #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     pub fn bounded_contribution(scene: &Scene, x: &Importon, vpl: &Vpl, visibility: bool, min_d2: f32) -> f32 {
         let mut g = vpl.geometry(x.p, x.n);
         if min_d2 > 0.0 {

@@ -8,6 +8,11 @@
 //! [`Frame`], light emission sampling, and the traits [`VplSampler`],
 //! [`VplVisibility`], [`IndirectShader`] and [`RadiosityEstimator`].
 //!
+//! The file formats (EXR, PNG, OBJ/MTL, TOML scene files) sit behind the
+//! default feature `formats`; with `default-features = false` the core keeps
+//! its types, the BVH and the built-in scenes and compiles about half the
+//! crates.
+//!
 //! ```
 //! use vpl_core::{SceneSetup, Purpose, stream};
 //!
@@ -18,10 +23,26 @@
 //! let mut rng = stream(0, 0, Purpose::PIXEL, 42);
 //! assert!(rng.next_f32() < 1.0);
 //! ```
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
 pub mod bsdf;
+pub mod budget;
 pub mod builtin;
 pub mod bvh;
 pub mod camera;
@@ -38,7 +59,9 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod mode;
+#[cfg(feature = "formats")]
 pub mod obj;
+pub mod params;
 pub mod ray;
 pub mod resample;
 pub mod rng;
@@ -46,32 +69,39 @@ pub mod sampling;
 pub mod scene;
 pub mod scene_file;
 pub mod sequence;
+pub mod services;
 pub mod setup;
 pub mod spectral;
+pub mod stats;
 pub mod surface;
 pub mod traits;
+pub mod triangle;
 pub mod vpl;
 
+pub use budget::Budget;
 pub use camera::{Camera, FovAxis};
 pub use clamp::GeometryClamp;
 pub use emission::EmittedRay;
 pub use error::{CoreError, Result};
 pub use frame::Frame;
 pub use gbuffer::{GBuffer, GSample, Receivers};
-pub use halton::Halton;
-pub use importons::Importon;
 pub use glam;
+pub use halton::Halton;
 pub use image::Image;
+pub use importons::Importon;
 pub use light::{Light, LightSample};
 pub use material::{Layered, Material};
 pub use mesh::{Mesh, TriangleDesc};
 pub use mode::Mode;
+pub use params::{ParamError, ParamKey, Params};
 pub use ray::{LocalFrame, Ray};
-pub use rng::{stream, Purpose, RngStream};
+pub use rng::{Purpose, RngStream, stream};
 pub use scene::{Geometry, Scene, TriangleData};
 pub use scene_file::SceneFile;
 pub use sequence::Sequence;
+pub use services::{RadiosityFactory, Services, SharedEstimator};
 pub use setup::SceneSetup;
+pub use stats::{Stat, Stats};
 pub use surface::{Hit, SurfacePoint};
 pub use traits::{CpuRays, IndirectShader, LightPathGenerator, RadiosityEstimator, RayCaster, VisibilityUpdate, VplSampler, VplVisibility};
 pub use vpl::{Vpl, VplSet};

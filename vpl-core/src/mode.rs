@@ -39,14 +39,19 @@ impl Mode {
     }
 }
 
+/// A mode name that is none of `full`, `direct`, `indirect`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown mode '{0}' (full, direct, indirect)")]
+pub struct UnknownMode(pub String);
+
 impl std::str::FromStr for Mode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownMode;
+    fn from_str(s: &str) -> Result<Self, UnknownMode> {
         match s {
             "full" => Ok(Mode::Full),
             "direct" => Ok(Mode::Direct),
             "indirect" => Ok(Mode::Indirect),
-            _ => Err(format!("unknown mode '{s}' (full, direct, indirect)")),
+            _ => Err(UnknownMode(s.to_string())),
         }
     }
 }

@@ -33,7 +33,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
     if let Err(e) = std::fs::metadata(path) {
         return Err(CoreError::Read { path: path.into(), source: e });
     }
-    let opts = tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true, ..Default::default() };
+    let opts = tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
     let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| CoreError::Obj { path: path.into(), reason: e.to_string() })?;
     let mut warnings = Vec::new();
     let mut materials: Vec<Material> = match mtl {
@@ -47,7 +47,13 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
                 let ke = m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO);
                 let mut mat = Material::emissive(m.name.clone(), kd.clamp(Vec3::ZERO, Vec3::ONE), ke.max(Vec3::ZERO));
                 let tr = m.unknown_param.get("Tr").and_then(|v| v.trim().parse::<f32>().ok());
-                mat.layered = layered_from_mtl(m.specular.map(Vec3::from), m.shininess, m.dissolve.or(tr.map(|t| 1.0 - t)), m.optical_density, m.illumination_model);
+                mat.layered = layered_from_mtl(
+                    m.specular.map(Vec3::from),
+                    m.shininess,
+                    m.dissolve.or(tr.map(|t| 1.0 - t)),
+                    m.optical_density,
+                    m.illumination_model,
+                );
                 mat
             })
             .collect(),
@@ -101,7 +107,13 @@ pub fn layered_from_mtl(ks: Option<Vec3>, ns: Option<f32>, dissolve: Option<f32>
     let ks = ks.unwrap_or(Vec3::ZERO).clamp(Vec3::ZERO, Vec3::ONE);
     let d = dissolve.unwrap_or(1.0).clamp(0.0, 1.0);
     let refracts = matches!(illum, Some(6 | 7));
-    let transmission = if d < 1.0 { 1.0 - d } else if refracts { 1.0 } else { 0.0 };
+    let transmission = if d < 1.0 {
+        1.0 - d
+    } else if refracts {
+        1.0
+    } else {
+        0.0
+    };
     if ks.max_element() <= 0.0 && transmission <= 0.0 {
         return None;
     }

@@ -3,7 +3,7 @@
 //! on an element already taken, at most `max_retries` times; a draw that runs
 //! out of retries takes nothing, as the paper's parallel version does.
 
-use crate::rng::{stream, Purpose};
+use crate::rng::{Purpose, stream};
 
 /// Indices of the elements taken, in draw order. Draw d uses stream
 /// (seed, iteration, RESAMPLE, d). Non-finite or negative weights count as

@@ -147,7 +147,12 @@ mod tests {
         let a: Vec<u32> = (0..8).map(|_| 0).scan(stream(1, 2, Purpose::PIXEL, 3), |s, _| Some(s.next_u32())).collect();
         let b: Vec<u32> = (0..8).map(|_| 0).scan(stream(1, 2, Purpose::PIXEL, 3), |s, _| Some(s.next_u32())).collect();
         assert_eq!(a, b);
-        for other in [stream(2, 2, Purpose::PIXEL, 3), stream(1, 3, Purpose::PIXEL, 3), stream(1, 2, Purpose::LIGHT_PATH, 3), stream(1, 2, Purpose::PIXEL, 4)] {
+        for other in [
+            stream(2, 2, Purpose::PIXEL, 3),
+            stream(1, 3, Purpose::PIXEL, 3),
+            stream(1, 2, Purpose::LIGHT_PATH, 3),
+            stream(1, 2, Purpose::PIXEL, 4),
+        ] {
             let c: Vec<u32> = (0..8).map(|_| 0).scan(other, |s, _| Some(s.next_u32())).collect();
             assert_ne!(a, c);
         }

@@ -71,7 +71,7 @@ pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{stream, Purpose};
+    use crate::rng::{Purpose, stream};
 
     #[test]
     fn cosine_hemisphere_has_cosine_moments() {

@@ -7,40 +7,10 @@ use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::ray::Ray;
-use crate::sampling::uniform_triangle;
 use crate::surface::{Hit, SurfacePoint};
+pub use crate::triangle::TriangleData;
 use glam::Vec3;
 use std::sync::Arc;
-
-/// Per-triangle data kept for shading and light sampling.
-#[derive(Clone, Copy, Debug)]
-pub struct TriangleData {
-    /// First vertex.
-    pub p0: Vec3,
-    /// Edge p1 − p0.
-    pub e1: Vec3,
-    /// Edge p2 − p0.
-    pub e2: Vec3,
-    /// Unit geometric normal, `normalize(e1 × e2)`.
-    pub ng: Vec3,
-    /// Area.
-    pub area: f32,
-    /// Material index.
-    pub material: u32,
-    /// Index into the scene's shading-normal table (`u32::MAX` = flat).
-    pub normals: u32,
-}
-
-impl TriangleData {
-    /// The point a uniform sample `u` ∈ [0, 1)² maps to ([`uniform_triangle`]):
-    /// how light sampling, light emission and the progressive renderer's
-    /// primary VPLs place a point on an emitting triangle.
-    #[inline]
-    pub fn sample_point(&self, u: (f32, f32)) -> Vec3 {
-        let (b1, b2) = uniform_triangle(u.0, u.1);
-        self.p0 + self.e1 * b1 + self.e2 * b2
-    }
-}
 
 /// Geometry that does not change during a sequence: triangles, shading normals, BVH.
 #[derive(Debug)]
@@ -117,6 +87,7 @@ impl Scene {
     ///
     /// Errors: a non-finite vertex, no triangle of nonzero area, no light,
     /// a material index out of range.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     pub fn new(name: impl Into<String>, mesh: &Mesh, materials: Vec<Material>, extra_lights: Vec<Light>, two_sided: bool) -> Result<Scene> {
         let name = name.into();
         for (i, p) in mesh.positions.iter().enumerate() {
@@ -130,7 +101,10 @@ impl Scene {
         let mut degenerate = 0usize;
         for (ti, t) in mesh.triangles.iter().enumerate() {
             let get = |i: u32| -> Result<Vec3> {
-                mesh.positions.get(i as usize).copied().ok_or_else(|| CoreError::Invalid(format!("triangle {ti} of {name} refers to missing vertex {i}")))
+                mesh.positions
+                    .get(i as usize)
+                    .copied()
+                    .ok_or_else(|| CoreError::Invalid(format!("triangle {ti} of {name} refers to missing vertex {i}")))
             };
             let (p0, p1, p2) = (get(t.v[0])?, get(t.v[1])?, get(t.v[2])?);
             if t.material as usize >= materials.len() {
@@ -258,7 +232,13 @@ impl Scene {
         } else {
             let ns = &self.geometry.shading_normals[t.normals as usize];
             let n = (ns[0] * (1.0 - b1 - b2) + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
-            if n == Vec3::ZERO { t.ng } else if n.dot(t.ng) < 0.0 { -n } else { n }
+            if n == Vec3::ZERO {
+                t.ng
+            } else if n.dot(t.ng) < 0.0 {
+                -n
+            } else {
+                n
+            }
         };
         SurfacePoint { p, ng: t.ng, n, triangle: tri, material: t.material }
     }
@@ -351,11 +331,7 @@ impl Scene {
     pub fn light_unoccluded(&self, x: Vec3, ng: Vec3, ls: &LightSample) -> bool {
         let eps = self.geometry.epsilon;
         let o = x + ng * eps;
-        if ls.dist.is_finite() {
-            self.visible(o, x + ls.wi * ls.dist)
-        } else {
-            !self.occluded(&Ray::new(o, ls.wi))
-        }
+        if ls.dist.is_finite() { self.visible(o, x + ls.wi * ls.dist) } else { !self.occluded(&Ray::new(o, ls.wi)) }
     }
 
     /// Offset that leaves a surface without self-intersection.

@@ -2,8 +2,10 @@
 //! and an animation, in TOML (schema in DESIGN.md). Unknown keys are errors.
 
 use crate::camera::FovAxis;
+#[cfg(feature = "formats")]
 use crate::error::{CoreError, Result};
 use serde::{Deserialize, Serialize};
+#[cfg(feature = "formats")]
 use std::path::Path;
 
 /// The whole file.
@@ -208,44 +210,57 @@ fn default_fps() -> f32 {
 
 impl SceneFile {
     /// Parses TOML text; `path` only names the file in errors.
+    #[cfg(feature = "formats")]
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
-        let f: SceneFile = toml::from_str(text).map_err(|e| CoreError::SceneFile {
-            path: path.into(),
-            reason: e.message().replace('\n', " ").trim().to_string(),
-        })?;
+        let f: SceneFile = toml::from_str(text)
+            .map_err(|e| CoreError::SceneFile { path: path.into(), reason: e.message().replace('\n', " ").trim().to_string() })?;
         match (&f.geometry.obj, &f.geometry.builtin) {
             (Some(_), Some(_)) | (None, None) => {
-                return Err(CoreError::SceneFile { path: path.into(), reason: "[geometry] needs exactly one of `obj` and `builtin`".into() });
+                return Err(CoreError::SceneFile {
+                    path: path.into(),
+                    reason: "[geometry] needs exactly one of `obj` and `builtin`".into(),
+                });
             }
             _ => {}
         }
         if f.geometry.up != "y" && f.geometry.up != "z" {
-            return Err(CoreError::SceneFile { path: path.into(), reason: format!("geometry.up must be \"y\" or \"z\", got \"{}\"", f.geometry.up) });
+            return Err(CoreError::SceneFile {
+                path: path.into(),
+                reason: format!("geometry.up must be \"y\" or \"z\", got \"{}\"", f.geometry.up),
+            });
         }
         if !(f.geometry.scale.is_finite() && f.geometry.scale > 0.0) {
-            return Err(CoreError::SceneFile { path: path.into(), reason: format!("geometry.scale must be positive, got {}", f.geometry.scale) });
+            return Err(CoreError::SceneFile {
+                path: path.into(),
+                reason: format!("geometry.scale must be positive, got {}", f.geometry.scale),
+            });
         }
         if let Some(s) = &f.sequence {
             if !(s.fps > 0.0 && s.duration > 0.0) {
-                return Err(CoreError::SceneFile { path: path.into(), reason: "sequence.fps and sequence.duration must be positive".into() });
+                return Err(CoreError::SceneFile {
+                    path: path.into(),
+                    reason: "sequence.fps and sequence.duration must be positive".into(),
+                });
             }
         }
         Ok(f)
     }
 
     /// Reads and parses a file.
+    #[cfg(feature = "formats")]
     pub fn read(path: &Path) -> Result<SceneFile> {
         let text = std::fs::read_to_string(path).map_err(|e| CoreError::Read { path: path.into(), source: e })?;
         Self::parse(&text, path)
     }
 
     /// The TOML text of this description.
+    #[cfg(feature = "formats")]
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).expect("scene descriptions always serialise")
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "formats"))]
 mod tests {
     use super::*;
 
@@ -256,7 +271,10 @@ mod tests {
         assert!(SceneFile::parse(ok, p).is_ok());
         for (bad, key) in [
             ("[geometry]\nbuiltin = \"cornell\"\ncolour = 1\n", "colour"),
-            ("[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\nradius = 2\n", "radius"),
+            (
+                "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\nradius = 2\n",
+                "radius",
+            ),
             ("[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin=[0,0,1]\ntarget=[0,0,0]\nfov=40\nzoom=2\n", "zoom"),
             ("[geometry]\nbuiltin = \"cornell\"\n[extra]\n", "extra"),
         ] {

@@ -6,6 +6,7 @@ use crate::camera::{Camera, FovAxis};
 use crate::error::{CoreError, Result};
 use crate::light::Light;
 use crate::material::{Layered, Material};
+#[cfg(feature = "formats")]
 use crate::obj::load_obj;
 use crate::scene::Scene;
 use crate::scene_file::{CameraSpec, GeometrySpec, LightSpec, SceneFile, SequenceSpec};
@@ -34,10 +35,13 @@ impl SceneSetup {
         let path = Path::new(spec);
         let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
         match ext.as_deref() {
+            #[cfg(feature = "formats")]
             Some("toml") => {
                 let file = SceneFile::read(path)?;
                 Self::from_file(file, path.parent().unwrap_or(Path::new(".")))
             }
+            #[cfg(not(feature = "formats"))]
+            Some("toml") => Err(CoreError::Invalid(format!("{spec}: reading scene files needs vpl-core's `formats` feature"))),
             Some("obj") => {
                 let file = SceneFile {
                     geometry: GeometrySpec { obj: Some(spec.to_string()), builtin: None, up: "y".into(), scale: 1.0, two_sided: None },
@@ -69,23 +73,8 @@ impl SceneSetup {
             let d = b.description();
             (b.name.to_string(), b.mesh, b.materials, Some(d), b.two_sided)
         } else {
-            let obj = file.geometry.obj.as_deref().unwrap_or_default();
-            let p = base.join(obj);
-            let data = load_obj(&p)?;
-            warnings.extend(data.warnings);
-            let mut mesh = data.mesh;
-            let s = file.geometry.scale;
-            let z_up = file.geometry.up == "z";
-            for v in mesh.positions.iter_mut() {
-                *v = if z_up { Vec3::new(v.x, v.z, -v.y) } else { *v } * s;
-            }
-            for n in mesh.normals.iter_mut() {
-                if z_up {
-                    *n = Vec3::new(n.x, n.z, -n.y);
-                }
-            }
-            let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-            (name, mesh, data.materials, None, true)
+            let (name, mesh, materials) = obj_geometry(&file.geometry, base, &mut warnings)?;
+            (name, mesh, materials, None, true)
         };
         for m in &file.materials {
             let target = materials
@@ -156,6 +145,7 @@ impl SceneSetup {
     }
 
     /// The scene description as TOML (what `vpl export-scene` prints).
+    #[cfg(feature = "formats")]
     pub fn to_toml(&self) -> String {
         self.description.to_toml()
     }
@@ -206,7 +196,9 @@ fn apply_override(m: &mut Material, o: &crate::scene_file::MaterialSpec) -> Resu
 /// The [`Light`] a `[[lights]]` entry describes.
 pub fn light_from_spec(s: &LightSpec) -> Result<Light> {
     Ok(match s {
-        LightSpec::Point { position, intensity } => Light::Point { position: vec3(*position, "light position")?, intensity: nonneg(*intensity, "light intensity")? },
+        LightSpec::Point { position, intensity } => {
+            Light::Point { position: vec3(*position, "light position")?, intensity: nonneg(*intensity, "light intensity")? }
+        }
         LightSpec::Spot { position, direction, intensity, angle, falloff_start } => {
             let d = vec3(*direction, "spot direction")?.normalize_or_zero();
             if d == Vec3::ZERO || !(*angle > 0.0 && *angle <= 180.0) {
@@ -305,11 +297,46 @@ fn framing_camera(scene: &Scene) -> Result<Camera> {
     Camera::new(c + Vec3::Z * d, c, Vec3::Y, fov, FovAxis::Smaller, (320, 240))
 }
 
+/// The OBJ geometry of a description: name, mesh (rotated to Y-up and
+/// scaled as `geometry` says) and materials; loading notes go to `warnings`.
+#[cfg(feature = "formats")]
+fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<(String, crate::mesh::Mesh, Vec<Material>)> {
+    let p = base.join(geometry.obj.as_deref().unwrap_or_default());
+    let data = load_obj(&p)?;
+    warnings.extend(data.warnings);
+    let mut mesh = data.mesh;
+    let s = geometry.scale;
+    let z_up = geometry.up == "z";
+    for v in mesh.positions.iter_mut() {
+        *v = if z_up { Vec3::new(v.x, v.z, -v.y) } else { *v } * s;
+    }
+    for n in mesh.normals.iter_mut() {
+        if z_up {
+            *n = Vec3::new(n.x, n.z, -n.y);
+        }
+    }
+    let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+    Ok((name, mesh, data.materials))
+}
+
+/// Without the `formats` feature there is no OBJ reader.
+#[cfg(not(feature = "formats"))]
+fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<(String, crate::mesh::Mesh, Vec<Material>)> {
+    let obj = geometry.obj.as_deref().unwrap_or_default();
+    Err(CoreError::Invalid(format!("{obj}: reading OBJ files needs vpl-core's `formats` feature")))
+}
+
 impl builtin::Builtin {
     /// The description `vpl export-scene` writes for this built-in.
     pub fn description(&self) -> SceneFile {
         SceneFile {
-            geometry: GeometrySpec { obj: None, builtin: Some(self.name.to_string()), up: "y".into(), scale: 1.0, two_sided: Some(self.two_sided) },
+            geometry: GeometrySpec {
+                obj: None,
+                builtin: Some(self.name.to_string()),
+                up: "y".into(),
+                scale: 1.0,
+                two_sided: Some(self.two_sided),
+            },
             camera: Some(self.camera.clone()),
             lights: Some(self.lights.clone()),
             materials: self.materials.iter().map(material_to_spec).collect(),
@@ -324,7 +351,14 @@ mod tests {
 
     #[test]
     fn light_specs_become_lights() {
-        let spot = light_from_spec(&LightSpec::Spot { position: [0.0, 2.0, 0.0], direction: [0.0, -2.0, 0.0], intensity: [5.0; 3], angle: 60.0, falloff_start: None }).unwrap();
+        let spot = light_from_spec(&LightSpec::Spot {
+            position: [0.0, 2.0, 0.0],
+            direction: [0.0, -2.0, 0.0],
+            intensity: [5.0; 3],
+            angle: 60.0,
+            falloff_start: None,
+        })
+        .unwrap();
         match spot {
             Light::Spot { direction, cos_total, cos_falloff_start, .. } => {
                 assert_eq!(direction, -Vec3::Y);
@@ -338,6 +372,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "formats")]
     fn sun_direction_keys_turn_the_sun() {
         let text = "[geometry]\nbuiltin = \"courtyard\"\n[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = [1, 1, 1]\n\
                     [sequence]\nduration = 2.0\nlights = [ { light = 0, t = 0.0, direction = [0, -1, 0] }, { light = 0, t = 2.0, direction = [1, -1, 0] } ]\n";

@@ -7,8 +7,9 @@ use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, Receivers};
 use crate::image::Image;
 use crate::ray::Ray;
-use crate::surface::Hit;
 use crate::scene::Scene;
+use crate::stats::Stats;
+use crate::surface::Hit;
 use crate::surface::SurfacePoint;
 use crate::vpl::{Vpl, VplSet};
 use glam::Vec3;
@@ -44,21 +45,12 @@ pub trait VplSampler: Send {
     /// Samples the VPLs of `frame`; slots that differ from the previous
     /// frame are marked changed.
     fn next_frame(&mut self, frame: &Frame) -> &VplSet;
-    /// One line of statistics about the last frame (stored VPLs, paths, …).
-    fn report(&self) -> String;
-    /// For samplers that thin candidates (Russian-roulette acceptance): the
-    /// mean acceptance probability of the last frame. `None` for the others.
-    fn acceptance(&self) -> Option<f32> {
-        None
+    /// Statistics of the last frame as typed key–values (`stored`,
+    /// `moved`, `acceptance`, milliseconds of each step, …): what a harness
+    /// prints and writes to CSV or JSON.
+    fn stats(&self) -> Stats {
+        Stats::default()
     }
-    /// For samplers that batch their rays (SMC): cast them with `rays` from
-    /// now on (a GPU twin of the BVH, say). Others ignore it.
-    fn set_ray_caster(&mut self, _rays: std::sync::Arc<dyn RayCaster>) {}
-    /// For samplers that estimate radiosity (SMC): estimate it from now on
-    /// with `make(paths, bounces)`, given the sampler's own paths per
-    /// estimate and bounces (a GPU twin of the path tracer, say). Others
-    /// ignore it.
-    fn set_radiosity_estimator(&mut self, _make: &dyn Fn(u32, u32) -> Box<dyn RadiosityEstimator + Send + Sync>) {}
 }
 
 /// A source of VPLs from light paths whose number is chosen per call, each

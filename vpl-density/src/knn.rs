@@ -1,10 +1,10 @@
 //! The k-nearest-neighbour density estimator of eq. (7).
 
+use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::num::NonZero;
-use vpl_core::glam::Vec3;
 
 /// Errors of [`KnnDensity`].
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]

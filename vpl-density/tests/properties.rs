@@ -11,10 +11,10 @@
 //! so nearly independent) and require it to be within 4 standard errors,
 //! 4 / √((k−2)·Q), of 1. Fixed proptest seeds make every run the same.
 
+use glam::{Quat, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
-use vpl_core::glam::{Quat, Vec3};
-use vpl_core::{stream, Purpose};
+use vpl_core::{Purpose, stream};
 use vpl_density::KnnDensity;
 
 const K: usize = 16;

@@ -2,7 +2,7 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::gbuffer::DeviceGBuffer;
-use crate::kernel::{bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
+use crate::kernel::{Binding, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, Image};
 use vpl_shading::CrossBilateral;
@@ -42,7 +42,15 @@ impl FilterKernel {
     }
 
     /// Records the filter of `input` (one vec4 a pixel of `g`) into `output`.
-    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, f: &CrossBilateral, g: &DeviceGBuffer, input: &wgpu::Buffer, output: &wgpu::Buffer) {
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        f: &CrossBilateral,
+        g: &DeviceGBuffer,
+        input: &wgpu::Buffer,
+        output: &wgpu::Buffer,
+    ) {
         let params = Params {
             width: g.width,
             height: g.height,

@@ -2,8 +2,8 @@
 //! `vpl_shading::render_gbuffer`) or uploaded from the host.
 
 use crate::context::{GpuContext, GpuError};
-use crate::kernel::{bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
-use crate::scene::{scene_layout, GpuScene, BVH_WGSL};
+use crate::kernel::{Binding, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{Camera, GBuffer, GSample, Scene};
 
@@ -123,7 +123,11 @@ impl GpuGBufferRenderer {
     /// Compiles the kernel.
     pub fn new(ctx: &GpuContext) -> GpuGBufferRenderer {
         let scene = scene_layout(ctx);
-        let layout = layout(ctx, "gbuffer", &[Binding::Uniform, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite]);
+        let layout = layout(
+            ctx,
+            "gbuffer",
+            &[Binding::Uniform, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite, Binding::ReadWrite],
+        );
         let source = format!("{BVH_WGSL}\n{}", include_str!("gbuffer.wgsl"));
         let pipeline = pipeline(ctx, "gbuffer", &source, "main", &[&scene, &layout]);
         GpuGBufferRenderer { layout, pipeline }

@@ -3,15 +3,15 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
+use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::raytraced::GpuRayTraced;
-use crate::scene::{scene_layout, GpuScene, BVH_WGSL};
+use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
 use crate::shadow_maps::GpuShadowMaps;
 use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
-use vpl_shading::{ExhaustiveShader, InterleavedShader, ShadeTimings, CLASSES};
+use vpl_shading::{CLASSES, ExhaustiveShader, InterleavedShader, ShadeTimings};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -85,7 +85,15 @@ impl GpuInterleavedShader {
     /// A shader on `gpu` with `clamp`, the default filter and `seed`, as
     /// [`InterleavedShader::new`].
     pub fn new(gpu: Gpu, clamp: Option<GeometryClamp>, seed: u64) -> GpuInterleavedShader {
-        GpuInterleavedShader { gpu, cpu: InterleavedShader::new(clamp, seed), kernels: None, subsets: None, timings: ShadeTimings::default(), device_timings: GpuShadeTimings::default(), exhaustive: false }
+        GpuInterleavedShader {
+            gpu,
+            cpu: InterleavedShader::new(clamp, seed),
+            kernels: None,
+            subsets: None,
+            timings: ShadeTimings::default(),
+            device_timings: GpuShadeTimings::default(),
+            exhaustive: false,
+        }
     }
 
     /// Every VPL at every pixel, unfiltered: twin of
@@ -154,7 +162,17 @@ impl GpuInterleavedShader {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, mode: u32, scene: &GpuScene, eps: f32, res: u32, bias: f32, sm: Option<&GpuShadowMaps>) -> Result<Image, GpuError> {
+    fn run(
+        &mut self,
+        gbuf: &GBuffer,
+        vpls: &VplSet,
+        mode: u32,
+        scene: &GpuScene,
+        eps: f32,
+        res: u32,
+        bias: f32,
+        sm: Option<&GpuShadowMaps>,
+    ) -> Result<Image, GpuError> {
         let t0 = Instant::now();
         self.subset_buffers(vpls.len());
         self.kernels();
@@ -195,11 +213,17 @@ impl GpuInterleavedShader {
         };
         let b_params = uniform(ctx, "gather params", &params);
         let b_e = storage(ctx, "E", n as u64 * 16)?;
-        let group = bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
+        let group =
+            bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
         finish(ctx, ctx.device.create_command_encoder(&Default::default()))?;
         let t_up = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(4).div_ceil(8), gbuf.height.div_ceil(4).div_ceil(8), CLASSES as u32));
+        dispatch(
+            &mut enc,
+            &k.gather,
+            &[&scene.group, &group],
+            (gbuf.width.div_ceil(4).div_ceil(8), gbuf.height.div_ceil(4).div_ceil(8), CLASSES as u32),
+        );
         finish(ctx, enc)?;
         let t1 = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -223,7 +247,8 @@ impl GpuInterleavedShader {
         let t3 = Instant::now();
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         self.timings = ShadeTimings { gather_ms: ms(t0, t1), filter_ms: ms(t1, t3) };
-        self.device_timings = GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
+        self.device_timings =
+            GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
         Ok(Image { width: gbuf.width, height: gbuf.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
     }
 }

@@ -47,10 +47,21 @@ pub(crate) fn bind(ctx: &GpuContext, label: &str, layout: &wgpu::BindGroupLayout
 
 /// A compute pipeline: WGSL `source`, entry point `entry`, bind groups
 /// `layouts` (group i is `layouts[i]`).
-pub(crate) fn pipeline(ctx: &GpuContext, label: &str, source: &str, entry: &str, layouts: &[&wgpu::BindGroupLayout]) -> wgpu::ComputePipeline {
+pub(crate) fn pipeline(
+    ctx: &GpuContext,
+    label: &str,
+    source: &str,
+    entry: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+) -> wgpu::ComputePipeline {
     let d = &ctx.device;
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) });
-    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some(label), bind_group_layouts: layouts, push_constant_ranges: &[] });
+    let module =
+        d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) });
+    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: layouts,
+        push_constant_ranges: &[],
+    });
     d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(label),
         layout: Some(&pl),
@@ -104,7 +115,12 @@ pub(crate) fn storage(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::
 }
 
 /// Records one dispatch of `pipeline` with bind groups `groups`.
-pub(crate) fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, groups: &[&wgpu::BindGroup], size: (u32, u32, u32)) {
+pub(crate) fn dispatch(
+    enc: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    size: (u32, u32, u32),
+) {
     if size.0 == 0 || size.1 == 0 || size.2 == 0 {
         return;
     }
@@ -122,11 +138,7 @@ pub(crate) fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputeP
 pub(crate) fn groups_1d(ctx: &GpuContext, n: u64, size: u32) -> (u32, u32, u32) {
     let groups = n.div_ceil(size as u64);
     let max = ctx.device.limits().max_compute_workgroups_per_dimension as u64;
-    if groups <= max {
-        (groups as u32, 1, 1)
-    } else {
-        (max as u32, groups.div_ceil(max) as u32, 1)
-    }
+    if groups <= max { (groups as u32, 1, 1) } else { (max as u32, groups.div_ceil(max) as u32, 1) }
 }
 
 /// Submits `enc` and waits for the device.

@@ -3,8 +3,8 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
-use crate::scene::{scene_layout, BVH_WGSL};
+use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::scene::{BVH_WGSL, scene_layout};
 use std::sync::OnceLock;
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::rng::stream_state;
@@ -61,10 +61,8 @@ impl GpuRadiosity {
             let p = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &l]);
             (l, p)
         });
-        let jobs: Vec<Vec4> = points
-            .iter()
-            .flat_map(|(y, _)| [y.p.extend(f32::from_bits(y.material)), y.n.extend(0.0), y.ng.extend(0.0)])
-            .collect();
+        let jobs: Vec<Vec4> =
+            points.iter().flat_map(|(y, _)| [y.p.extend(f32::from_bits(y.material)), y.n.extend(0.0), y.ng.extend(0.0)]).collect();
         let rng: Vec<[u32; 4]> = points
             .iter()
             .flat_map(|(_, seed)| {
@@ -85,7 +83,9 @@ impl GpuRadiosity {
                     Light::Spot { position, direction, intensity, cos_falloff_start, cos_total } => {
                         [head(2, 0, cos_total), position.extend(0.0), intensity.extend(0.0), direction.extend(cos_falloff_start)]
                     }
-                    Light::Directional { direction, irradiance } => [head(3, 0, 0.0), direction.extend(0.0), irradiance.extend(0.0), Vec4::ZERO],
+                    Light::Directional { direction, irradiance } => {
+                        [head(3, 0, 0.0), direction.extend(0.0), irradiance.extend(0.0), Vec4::ZERO]
+                    }
                 }
             })
             .collect();

@@ -2,10 +2,10 @@
 //! and `Scene::occluded`.
 
 use crate::context::{GpuContext, GpuError};
-use crate::kernel::{bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
-use crate::scene::{scene_layout, GpuScene, BVH_WGSL};
-use vpl_core::glam::Vec4;
+use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
 use vpl_core::Ray;
+use vpl_core::glam::Vec4;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -2,10 +2,10 @@
 //! triangles in its primitive order, per-triangle data and materials.
 
 use crate::context::{GpuContext, GpuError};
-use crate::kernel::{bind, layout, storage_init, Binding};
+use crate::kernel::{Binding, bind, layout, storage_init};
+use obvhs::BvhBuildParams;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 use std::sync::Arc;
 use std::time::Duration;
 use vpl_core::bvh::prepared_rows;
@@ -86,12 +86,7 @@ impl GpuScene {
             .triangles
             .iter()
             .flat_map(|t| {
-                [
-                    t.p0.extend(f32::from_bits(t.material)),
-                    t.e1.extend(f32::from_bits(t.normals)),
-                    t.e2.extend(t.area),
-                    t.ng.extend(0.0),
-                ]
+                [t.p0.extend(f32::from_bits(t.material)), t.e1.extend(f32::from_bits(t.normals)), t.e2.extend(t.area), t.ng.extend(0.0)]
             })
             .collect();
         let normals: Vec<Vec4> = g.shading_normals.iter().flat_map(|ns| ns.map(|n| n.extend(0.0))).collect();

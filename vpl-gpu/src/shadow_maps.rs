@@ -3,13 +3,13 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform, Binding};
-use crate::scene::{scene_layout, BVH_WGSL};
+use crate::kernel::{Binding, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::scene::GpuScene;
+use crate::scene::{BVH_WGSL, scene_layout};
 use std::sync::{Arc, Mutex};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{LocalFrame, Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
-use vpl_visibility::{MapView, ShadowMapError, MAX_RESOLUTION};
+use vpl_visibility::{MAX_RESOLUTION, MapView, ShadowMapError};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -67,7 +67,17 @@ impl GpuShadowMaps {
         if res == 0 || res > MAX_RESOLUTION {
             return Err(ShadowMapError::Resolution(res));
         }
-        Ok(GpuShadowMaps { gpu, res, eps: 0.0, bias_scale: 1.0, headers: Vec::new(), device: None, host: Mutex::new(None), kernel: None, scene: None })
+        Ok(GpuShadowMaps {
+            gpu,
+            res,
+            eps: 0.0,
+            bias_scale: 1.0,
+            headers: Vec::new(),
+            device: None,
+            host: Mutex::new(None),
+            kernel: None,
+            scene: None,
+        })
     }
 
     /// Texels per side.

@@ -13,7 +13,7 @@ mod common;
 
 use common::context;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Purpose, RadiosityEstimator, SceneSetup, SurfacePoint};
+use vpl_core::{Purpose, RadiosityEstimator, SceneSetup, SurfacePoint, stream};
 use vpl_gpu::{Gpu, GpuRadiosity};
 use vpl_pathtrace::PathRadiosity;
 
@@ -53,4 +53,3 @@ fn gpu_radiosity_matches_the_cpu_estimator() {
         check(&gpu, name);
     }
 }
-

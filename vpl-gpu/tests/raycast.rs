@@ -15,7 +15,7 @@ mod common;
 use common::context;
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::uniform_sphere;
-use vpl_core::{stream, Purpose, Ray, Scene, SceneSetup};
+use vpl_core::{Purpose, Ray, Scene, SceneSetup, stream};
 use vpl_gpu::{GpuRayCaster, GpuScene};
 
 /// Camera rays over a 96×64 image and rays in random directions from random
@@ -30,7 +30,8 @@ fn rays(scene: &Scene, setup: &SceneSetup) -> Vec<Ray> {
         let o = if k % 2 == 0 {
             lo + (hi - lo) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
         } else {
-            let t = &scene.geometry.triangles[(rng.next_f32() * scene.geometry.triangles.len() as f32) as usize % scene.geometry.triangles.len()];
+            let t = &scene.geometry.triangles
+                [(rng.next_f32() * scene.geometry.triangles.len() as f32) as usize % scene.geometry.triangles.len()];
             let (u, v) = (rng.next_f32() * 0.5, rng.next_f32() * 0.5);
             let p = t.p0 + t.e1 * u + t.e2 * v;
             let n = if d.dot(t.ng) > 0.0 { t.ng } else { -t.ng };

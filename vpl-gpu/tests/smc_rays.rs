@@ -13,7 +13,7 @@ mod common;
 
 use common::context;
 use std::sync::{Arc, Mutex};
-use vpl_core::{CpuRays, Frame, Hit, Ray, RayCaster, Scene, SceneSetup, VplSampler};
+use vpl_core::{CpuRays, Frame, Hit, Ray, RayCaster, Scene, SceneSetup, Services, VplSampler};
 use vpl_gpu::{Gpu, GpuRays};
 use vpl_smc::{SmcConfig, SmcSampler};
 
@@ -47,14 +47,15 @@ fn smc_with_gpu_rays_takes_the_cpu_decisions() {
     let setup = SceneSetup::load("office").unwrap();
     let config = SmcConfig { vpls: 256, ..SmcConfig::default() };
     let mut cpu = SmcSampler::new(config).unwrap();
-    let mut on_gpu = SmcSampler::new(config).unwrap();
     let both = Arc::new(Both(GpuRays::new(gpu), Mutex::new([0; 4])));
-    on_gpu.set_ray_caster(both.clone());
+    let services = Services { rays: both.clone(), radiosity: None };
+    let mut on_gpu = SmcSampler::with_services(config, &services).unwrap();
     for f in [0u32, 15, 30, 45] {
         let (scene, camera) = setup.frame(f).unwrap();
         let camera = camera.with_resolution((64, 36)).unwrap();
         let gbuf = vpl_shading::render_gbuffer(&scene, &camera);
-        let frame = Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 3, gbuffer: &gbuf, previous: None };
+        let frame =
+            Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 3, gbuffer: &gbuf, previous: None };
         let a = cpu.next_frame(&frame).clone();
         let b = on_gpu.next_frame(&frame).clone();
         let same = (0..a.len()).filter(|&s| a.get(s) == b.get(s)).count();

@@ -3,12 +3,12 @@
 //! Depth and modes follow [`vpl_core::Mode`] (Mitsuba 3's convention:
 //! `max_depth` counts path segments).
 
+use std::f32::consts::FRAC_1_PI;
 use vpl_core::bsdf::scatter;
-use vpl_core::clamp::{geometry_term, GeometryClamp};
+use vpl_core::clamp::{GeometryClamp, geometry_term};
+use vpl_core::glam::Vec3;
 use vpl_core::sampling::{cosine_hemisphere, power_heuristic};
 use vpl_core::{LocalFrame, Mode, Ray, RngStream, Scene, SurfacePoint};
-use vpl_core::glam::Vec3;
-use std::f32::consts::FRAC_1_PI;
 
 /// A path tracer configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,7 +80,18 @@ impl PathTracer {
     /// the radiance the rest of the path brings, counting paths whose total
     /// number of scattering vertices lies in `min_k..=max_k`.
     #[allow(clippy::too_many_arguments)]
-    fn walk(&self, scene: &Scene, mut sp: SurfacePoint, mut wo: Vec3, mut k: u32, min_k: u32, max_k: u32, clamp: Option<GeometryClamp>, rng: &mut RngStream) -> Vec3 {
+    #[allow(clippy::collapsible_if)] // each condition of next-event estimation on its own line, as the estimator reads
+    fn walk(
+        &self,
+        scene: &Scene,
+        mut sp: SurfacePoint,
+        mut wo: Vec3,
+        mut k: u32,
+        min_k: u32,
+        max_k: u32,
+        clamp: Option<GeometryClamp>,
+        rng: &mut RngStream,
+    ) -> Vec3 {
         let eps = scene.epsilon();
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
@@ -171,7 +182,18 @@ impl PathTracer {
     /// lobe. A path that meets a dispersive surface draws a wavelength there
     /// and keeps it (lazy spectral rendering, Dammertz et al. 2010, §6).
     #[allow(clippy::too_many_arguments)]
-    fn walk_layered(&self, scene: &Scene, mut sp: SurfacePoint, mut wo: Vec3, mut k: u32, min_k: u32, max_k: u32, clamp: Option<GeometryClamp>, mut beta: Vec3, rng: &mut RngStream) -> Vec3 {
+    fn walk_layered(
+        &self,
+        scene: &Scene,
+        mut sp: SurfacePoint,
+        mut wo: Vec3,
+        mut k: u32,
+        min_k: u32,
+        max_k: u32,
+        clamp: Option<GeometryClamp>,
+        mut beta: Vec3,
+        rng: &mut RngStream,
+    ) -> Vec3 {
         let eps = scene.epsilon();
         let mut l = Vec3::ZERO;
         let mut lambda: Option<f32> = None;

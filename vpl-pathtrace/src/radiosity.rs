@@ -4,7 +4,7 @@
 use crate::integrator::PathTracer;
 use vpl_core::Mode;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Purpose, RadiosityEstimator, Scene, SurfacePoint};
+use vpl_core::{Purpose, RadiosityEstimator, Scene, SurfacePoint, stream};
 
 /// Estimates L(y) with `paths` paths of at most `max_bounces` bounces after y.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Camera, Image, Purpose, Scene};
+use vpl_core::{Camera, Image, Purpose, Scene, stream};
 
 /// Side of the square tiles work is split into.
 pub const TILE: u32 = 16;
@@ -48,7 +48,13 @@ pub enum RenderError {
 
 /// Renders `scene` through `camera` with `pt`. `progress(done, total)` is
 /// called with counts of finished pixels as tiles complete.
-pub fn render(scene: &Scene, camera: &Camera, pt: &PathTracer, s: RenderSettings, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<RenderOutput, RenderError> {
+pub fn render(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    s: RenderSettings,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<RenderOutput, RenderError> {
     if s.spp == 0 {
         return Err(RenderError::ZeroSpp);
     }
@@ -193,7 +199,16 @@ pub fn track(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u3
 
 /// [`track`] with a choice of where in the pixel the camera rays start.
 #[allow(clippy::too_many_arguments)]
-pub fn track_with(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u32)], spp: u32, seed: u64, frame: u64, footprint: Footprint) -> Vec<TrackedPixel> {
+pub fn track_with(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    pixels: &[(u32, u32)],
+    spp: u32,
+    seed: u64,
+    frame: u64,
+    footprint: Footprint,
+) -> Vec<TrackedPixel> {
     let batches = spp.div_ceil(TRACK_BATCH);
     let items: Vec<(usize, u32)> = (0..pixels.len()).flat_map(|p| (0..batches).map(move |b| (p, b))).collect();
     let accs: Vec<Accumulator> = items

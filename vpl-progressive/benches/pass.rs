@@ -2,10 +2,10 @@
 //! on `cornell` (diffuse only) and caustic photons with projection maps on
 //! `glass`. `vpl render --method progressive` prints passes/s at full size.
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use vpl_core::SceneSetup;
 use vpl_progressive::projection::{ProjectionMap, SpecularSet};
-use vpl_progressive::{specular_bounds, Progressive, ProgressiveConfig, Techniques};
+use vpl_progressive::{Progressive, ProgressiveConfig, Techniques, specular_bounds};
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("progressive");
@@ -23,7 +23,9 @@ fn bench(c: &mut Criterion) {
             })
         });
         if scene == "glass" {
-            let only = |t: Techniques| Progressive::new(&setup.scene, camera.clone(), ProgressiveConfig { techniques: t, ..Default::default() }).unwrap();
+            let only = |t: Techniques| {
+                Progressive::new(&setup.scene, camera.clone(), ProgressiveConfig { techniques: t, ..Default::default() }).unwrap()
+            };
             let caustics = only(Techniques { caustics: true, ..Techniques::NONE });
             g.bench_function("glass_96x72_caustics_only", |b| b.iter(|| caustics.render_pass(1)));
             let vpl = only(Techniques { vpl: true, ..Techniques::NONE });
@@ -31,7 +33,9 @@ fn bench(c: &mut Criterion) {
             let bounds = SpecularSet::new(specular_bounds(&setup.scene));
             let y = vpl_core::glam::Vec3::new(0.0, 2.98, 0.0);
             g.throughput(Throughput::Elements(bounds.triangles.len() as u64));
-            g.bench_function("glass_projection_map_128x256", |b| b.iter(|| ProjectionMap::build(y, Some(-vpl_core::glam::Vec3::Y), &bounds, (128, 256))));
+            g.bench_function("glass_projection_map_128x256", |b| {
+                b.iter(|| ProjectionMap::build(y, Some(-vpl_core::glam::Vec3::Y), &bounds, (128, 256)))
+            });
         }
     }
     g.finish();

@@ -65,7 +65,11 @@ impl Techniques {
                 "vpl" => t.vpl = true,
                 "caustics" => t.caustics = true,
                 "specular" => t.specular_gathering = true,
-                other => return Err(ProgressiveError::Config(format!("unknown technique '{other}' (known: direct, vpl, caustics, specular, all)"))),
+                other => {
+                    return Err(ProgressiveError::Config(format!(
+                        "unknown technique '{other}' (known: direct, vpl, caustics, specular, all)"
+                    )));
+                }
             }
         }
         if t == Techniques::NONE {
@@ -135,6 +139,7 @@ impl Default for ProgressiveConfig {
 
 impl ProgressiveConfig {
     /// Checks the settings.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     pub fn validate(&self) -> Result<(), ProgressiveError> {
         let bad = |m: &str| Err(ProgressiveError::Config(m.into()));
         if self.max_depth == 0 {

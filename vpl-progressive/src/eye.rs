@@ -17,7 +17,7 @@ use crate::vertex::roulette;
 use vpl_core::bsdf::scatter;
 use vpl_core::bsdf::{Layer, LayerKind};
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Camera, Purpose, Ray, Scene, SurfacePoint};
+use vpl_core::{Camera, Purpose, Ray, Scene, SurfacePoint, stream};
 
 /// The diffuse vertex an eye path ends on: a gather point for VPLs and a
 /// caustic histogram bin.
@@ -122,8 +122,7 @@ pub fn trace_eye(scene: &Scene, camera: &Camera, cfg: &ProgressiveConfig, pass: 
     let mut direct = Vec3::ZERO;
     let mut cone = RayCone { width: 0.0, spread };
     let mut s = 0u32;
-    loop {
-        let Some(hit) = scene.intersect(&ray) else { break };
+    while let Some(hit) = scene.intersect(&ray) {
         cone = cone.travel(hit.t);
         let sp = hit.point;
         let wo = -ray.d;

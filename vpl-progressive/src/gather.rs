@@ -13,6 +13,7 @@ use vpl_core::{GeometryClamp, Scene};
 /// the geometry term clamped by `clamp`; for a primary VPL, the light
 /// sample at the same point (no clamp, as for every connection to a light).
 #[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
 pub fn contribution(scene: &Scene, e: &EyeVertex, v: &PassVpl, clamp: Option<GeometryClamp>) -> Vec3 {
     let x = &e.x;
     match v.emitter {

@@ -19,12 +19,12 @@ use crate::eye::EyeVertex;
 use crate::light_paths::{Emitter, PassVpl};
 use crate::projection::{ProjectionMap, SpecularSet};
 use crate::vertex::roulette;
-use vpl_core::bsdf::scatter;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::f32::consts::{FRAC_1_PI, PI};
+use vpl_core::bsdf::scatter;
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::{cosine_hemisphere, uniform_sphere};
-use vpl_core::{stream, Light, LocalFrame, Purpose, Ray, Scene, SurfacePoint};
+use vpl_core::{Light, LocalFrame, Purpose, Ray, Scene, SurfacePoint, stream};
 
 /// Cosine below which a photon's surface and a bin's are different surfaces.
 const SAME_SURFACE_COS: f32 = 0.5;
@@ -99,6 +99,7 @@ struct Emission {
 }
 
 /// Draws photon direction and power for VPL `v` (one of `n` photons).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
 fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &mut vpl_core::RngStream) -> Option<Emission> {
     let eps = scene.epsilon();
     let u_cell = rng.next_f32();
@@ -163,7 +164,16 @@ fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &m
 /// Traces `n` photons from VPL `v` (photon numbers `first..first + n` of
 /// the pass) and collects their deposits into `bins`.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_photons(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, bounds: &SpecularSet, first: u64, n: u64, bins: &Bins) -> SourceResult {
+pub fn trace_photons(
+    scene: &Scene,
+    cfg: &ProgressiveConfig,
+    pass: u64,
+    v: &PassVpl,
+    bounds: &SpecularSet,
+    first: u64,
+    n: u64,
+    bins: &Bins,
+) -> SourceResult {
     let mut out = SourceResult { coverage: 1.0, ..Default::default() };
     let map = if cfg.projection_maps {
         let Some(y) = v.position(scene) else {
@@ -190,7 +200,17 @@ pub fn trace_photons(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &Pass
 }
 
 #[allow(clippy::too_many_arguments)]
-fn trace_with(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, map: Option<&ProjectionMap>, first: u64, n: u64, bins: &Bins, mut out: SourceResult) -> SourceResult {
+fn trace_with(
+    scene: &Scene,
+    cfg: &ProgressiveConfig,
+    pass: u64,
+    v: &PassVpl,
+    map: Option<&ProjectionMap>,
+    first: u64,
+    n: u64,
+    bins: &Bins,
+    mut out: SourceResult,
+) -> SourceResult {
     let eps = scene.epsilon();
     let max_vertices = cfg.max_depth.saturating_sub(1);
     for p in 0..n {
@@ -203,8 +223,7 @@ fn trace_with(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, v: &PassVpl, ma
         let mut ray = e.ray;
         // Specular vertices the photon has passed (m).
         let mut m = 0u32;
-        loop {
-            let Some(hit) = scene.intersect(&ray) else { break };
+        while let Some(hit) = scene.intersect(&ray) {
             let w_in = -ray.d;
             if m > 0 {
                 deposit(bins, cfg, &hit.point, w_in, power, m + v.depth, &mut out.deposits);

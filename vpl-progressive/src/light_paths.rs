@@ -5,10 +5,10 @@
 
 use crate::config::ProgressiveConfig;
 use crate::vertex::roulette;
-use vpl_core::bsdf::scatter;
 use vpl_core::bsdf::Layer;
+use vpl_core::bsdf::scatter;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Purpose, Ray, Scene, SurfacePoint};
+use vpl_core::{Purpose, Ray, Scene, SurfacePoint, stream};
 
 /// What a pass VPL emits from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,6 +73,7 @@ impl PassVpl {
 }
 
 /// Traces light path `path` of pass `pass` and appends its VPLs to `out`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
 pub fn trace_light_path(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, path: u32, out: &mut Vec<PassVpl>) {
     if scene.lights.is_empty() || cfg.max_depth < 2 {
         return;
@@ -100,7 +101,12 @@ pub fn trace_light_path(scene: &Scene, cfg: &ProgressiveConfig, pass: u64, path:
         let w_in = -ray.d;
         let Some(sc) = scatter(scene, hit.point, w_in, cfg.spectral, &mut lambda, &mut beta, &mut rng) else { break };
         if sc.layer.is_diffuse() {
-            out.push(PassVpl { emitter: Emitter::Surface { y: sc.at, w_in, flux: beta, layer: sc.layer, eta: sc.eta }, depth: j, lambda, path });
+            out.push(PassVpl {
+                emitter: Emitter::Surface { y: sc.at, w_in, flux: beta, layer: sc.layer, eta: sc.eta },
+                depth: j,
+                lambda,
+                path,
+            });
         }
         let Some(s) = sc.layer.sample(&sc.at, w_in, sc.eta, rng.next_2d()) else { break };
         beta *= s.weight;

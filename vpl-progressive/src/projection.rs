@@ -198,6 +198,7 @@ impl ProjectionMap {
 
     /// A direction drawn uniformly by solid angle over the marked cells with
     /// `u` ∈ [0, 1)³, and its density 1/Ω_marked. `None` for an empty map.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     pub fn sample(&self, u: f32, v: (f32, f32)) -> Option<(Vec3, f32)> {
         let total = self.solid_angle();
         if !(total > 0.0) {
@@ -220,7 +221,7 @@ impl ProjectionMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vpl_core::rng::{stream, Purpose};
+    use vpl_core::rng::{Purpose, stream};
     use vpl_core::sampling::uniform_sphere;
 
     /// Every direction that meets a bounding sphere lies in a marked cell,

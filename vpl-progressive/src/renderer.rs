@@ -2,15 +2,15 @@
 
 use crate::config::{Culling, ProgressiveConfig};
 use crate::error::ProgressiveError;
-use crate::eye::{pixel_angle, trace_eye, EyePath, EyeVertex};
+use crate::eye::{EyePath, EyeVertex, pixel_angle, trace_eye};
 use crate::gather::{contribution, sees};
-use crate::histogram::{trace_photons, Bins, SourceResult};
-use crate::light_paths::{trace_light_path, Emitter, PassVpl};
+use crate::histogram::{Bins, SourceResult, trace_photons};
+use crate::light_paths::{Emitter, PassVpl, trace_light_path};
 use crate::projection::{SpecularBound, SpecularSet};
 use rayon::prelude::*;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, Camera, Halton, Image, Purpose, Scene};
+use vpl_core::{Camera, Halton, Image, Purpose, Scene, stream};
 
 /// What one pass did and how long each step took.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -63,7 +63,9 @@ pub fn specular_bounds(scene: &Scene) -> Vec<SpecularBound> {
         .geometry
         .triangles
         .iter()
-        .filter(|t| scene.materials[t.material as usize].layered.as_ref().is_some_and(|l| !l.is_diffuse() && l.specular.max_element() > 0.0))
+        .filter(|t| {
+            scene.materials[t.material as usize].layered.as_ref().is_some_and(|l| !l.is_diffuse() && l.specular.max_element() > 0.0)
+        })
         .map(|t| {
             let (p1, p2) = (t.p0 + t.e1, t.p0 + t.e2);
             let c = (t.p0 + p1 + p2) / 3.0;
@@ -81,7 +83,15 @@ impl<'s> Progressive<'s> {
             return Err(ProgressiveError::NoLights(scene.name.clone()));
         }
         let n = camera.resolution.0 as usize * camera.resolution.1 as usize;
-        Ok(Progressive { scene, camera, config, bounds: SpecularSet::new(specular_bounds(scene)), sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], passes: 0 })
+        Ok(Progressive {
+            scene,
+            camera,
+            config,
+            bounds: SpecularSet::new(specular_bounds(scene)),
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+            passes: 0,
+        })
     }
 
     /// The settings.
@@ -225,9 +235,11 @@ impl<'s> Progressive<'s> {
             let lit: Vec<Vec3> = eye
                 .par_iter()
                 .map(|e| match &e.vertex {
-                    Some(v) if vpl_for(v) => {
-                        stored.iter().filter(|l| v.specular + 1 + l.depth <= max_vertices).map(|l| contribution(scene, v, l, cfg.clamp)).sum()
-                    }
+                    Some(v) if vpl_for(v) => stored
+                        .iter()
+                        .filter(|l| v.specular + 1 + l.depth <= max_vertices)
+                        .map(|l| contribution(scene, v, l, cfg.clamp))
+                        .sum(),
                     _ => Vec3::ZERO,
                 })
                 .collect();
@@ -242,11 +254,15 @@ impl<'s> Progressive<'s> {
         if cfg.caustic_paths > 0 && !self.bounds.is_empty() && (cfg.techniques.caustics || cfg.techniques.specular_gathering) {
             let bins = Bins::new(eye.iter().filter_map(|e| e.vertex.as_ref()).collect());
             // A photon needs a specular vertex and a bin after its source.
-            let sources: Vec<&PassVpl> = vpls.iter().filter(|v| (cfg.indirect_caustics || v.is_primary()) && v.depth + 2 <= max_vertices).collect();
+            let sources: Vec<&PassVpl> =
+                vpls.iter().filter(|v| (cfg.indirect_caustics || v.is_primary()) && v.depth + 2 <= max_vertices).collect();
             if !bins.is_empty() && !sources.is_empty() {
                 let n = (cfg.caustic_paths as u64).div_ceil(sources.len() as u64);
-                let results: Vec<SourceResult> =
-                    sources.par_iter().enumerate().map(|(i, v)| trace_photons(scene, cfg, pass, v, &self.bounds, i as u64 * n, n, &bins)).collect();
+                let results: Vec<SourceResult> = sources
+                    .par_iter()
+                    .enumerate()
+                    .map(|(i, v)| trace_photons(scene, cfg, pass, v, &self.bounds, i as u64 * n, n, &bins))
+                    .collect();
                 let mut coverage = 0.0f64;
                 for r in &results {
                     st.photons += r.photons;

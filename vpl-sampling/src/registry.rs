@@ -1,190 +1,220 @@
-//! The registry of samplers, by name.
+//! The registry of samplers: a value users extend with their own.
 
-use vpl_core::VplSampler;
-use vpl_ir::{InstantRadiosity, IrConfig, PathSampling};
-use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
-use vpl_rr::{RrConfig, RrSampler};
-use vpl_smc::{SmcConfig, SmcSampler};
-use vpl_tcas::{TcasConfig, TcasSampler};
+use std::sync::Arc;
+use vpl_core::{Budget, ParamError, ParamKey, Params, Services, SharedEstimator, VplSampler};
 
-/// What every sampler is built from. Fields a sampler does not use are ignored.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SamplerConfig {
-    /// The VPL budget I.
-    pub vpls: usize,
-    /// Longest path in segments (Mitsuba's convention): VPLs reach
-    /// `max_depth − 2` light-path bounces.
-    pub max_depth: u32,
-    /// Random or Halton light paths (samplers that trace them from the lights).
-    pub sampling: PathSampling,
-    /// New light paths every frame (IR; see [`IrConfig::fresh_paths`]).
-    pub fresh_paths: bool,
-    /// The SMC sampler's settings; its `vpls` and `radiosity_bounces` are
-    /// taken from `vpls` and `max_depth` above.
-    pub smc: SmcConfig,
-    /// Russian-roulette acceptance (its `vpls` is taken from `vpls`); it
-    /// wraps IR with `sampling` and `fresh_paths` above.
-    pub rr: RrConfig,
-    /// Metropolis IR (`vpls` and `bounces` taken from above).
-    pub mir: MirConfig,
-    /// The resampling stand-in for MIR (`vpls` and `radiosity_bounces` taken from above).
-    pub mir_resample: MirResampleConfig,
-    /// TCAS (`vpls` taken from above; one bounce whatever the depth).
-    pub tcas: TcasConfig,
-}
-
-impl Default for SamplerConfig {
-    fn default() -> Self {
-        SamplerConfig {
-            vpls: 2048,
-            max_depth: 5,
-            sampling: PathSampling::Random,
-            fresh_paths: false,
-            smc: SmcConfig::default(),
-            rr: RrConfig::default(),
-            mir: MirConfig::default(),
-            mir_resample: MirResampleConfig::default(),
-            tcas: TcasConfig::default(),
-        }
-    }
-}
-
-impl SamplerConfig {
-    /// Light-path bounces that carry VPLs: `max_depth − 2`.
-    pub fn bounces(&self) -> u32 {
-        self.max_depth.saturating_sub(2)
-    }
-
-    /// The SMC settings with this config's budget and depth: radiosity paths
-    /// of `max_depth − 3` bounces after the VPL.
-    pub fn smc_config(&self) -> SmcConfig {
-        SmcConfig { vpls: self.vpls, radiosity_bounces: self.max_depth.saturating_sub(3), ..self.smc }
-    }
-
-    /// An error when the depth leaves no indirect light for VPLs (max depth < 3).
-    fn needs_indirect(&self, name: &'static str) -> Result<(), SamplingError> {
-        if self.max_depth < 3 {
-            return Err(SamplingError::Config(name, format!("max depth {} has no indirect light for VPLs to carry (at least 3)", self.max_depth)));
-        }
-        Ok(())
-    }
-}
-
-/// Errors of [`build`].
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+/// Errors of building a sampler from the registry.
+#[derive(Debug, thiserror::Error)]
 pub enum SamplingError {
     /// No sampler has this name.
     #[error("unknown sampler '{0}' (available: {1})")]
     Unknown(String, String),
-    /// A sampler the toolkit plans that this build does not have yet.
-    #[error("sampler '{0}' is not available in this build (available: {1})")]
-    NotAvailable(String, String),
-    /// The configuration does not suit the sampler.
+    /// A sampler of this name is already registered.
+    #[error("a sampler called '{0}' is already registered")]
+    Duplicate(String),
+    /// A parameter is malformed, out of range, or read by nobody.
+    #[error("sampler '{name}': {source}")]
+    Param {
+        /// The sampler.
+        name: String,
+        /// What is wrong, naming the key.
+        #[source]
+        source: ParamError,
+    },
+    /// Keys were given that the sampler does not read.
+    #[error("sampler '{name}' does not read {} (it reads: {})", keys.join(", "), if reads.is_empty() { "no keys".to_string() } else { reads.join(", ") })]
+    Unread {
+        /// The sampler.
+        name: String,
+        /// The keys it did not read.
+        keys: Vec<String>,
+        /// The keys its entry documents.
+        reads: Vec<String>,
+    },
+    /// The budget does not suit the sampler (too shallow for VPLs, say).
     #[error("sampler '{0}': {1}")]
-    Config(&'static str, String),
+    Budget(String, String),
+    /// The sampler's own constructor refused its settings.
+    #[error("sampler '{name}': {source}")]
+    Sampler {
+        /// The sampler.
+        name: String,
+        /// Its error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
 }
 
-/// A registered sampler.
-pub struct SamplerEntry {
-    /// Name used on the command line.
-    pub name: &'static str,
-    /// One line about it.
-    pub about: &'static str,
-    /// Constructor.
-    pub build: fn(&SamplerConfig) -> Result<Box<dyn VplSampler>, SamplingError>,
-}
-
-/// Every sampler this build has.
-pub const SAMPLERS: &[SamplerEntry] = &[
-    SamplerEntry {
-        name: "ir",
-        about: "Instant Radiosity (Keller 1997): VPLs at the diffuse vertices of light paths",
-        build: |c| {
-            InstantRadiosity::new(IrConfig { vpls: c.vpls, bounces: c.bounces(), sampling: c.sampling, fresh_paths: c.fresh_paths })
-                .map(|s| Box::new(s) as Box<dyn VplSampler>)
-                .map_err(|e| SamplingError::Config("ir", e.to_string()))
-        },
-    },
-    SamplerEntry {
-        name: "rr",
-        about: "Russian-roulette acceptance (Georgiev & Slusallek 2010): IR's VPLs kept in proportion to the light they bring the camera",
-        build: |c| {
-            c.needs_indirect("rr")?;
-            RrSampler::over_ir(RrConfig { vpls: c.vpls, ..c.rr }, c.bounces(), c.fresh_paths)
-                .map(|s| Box::new(s) as Box<dyn VplSampler>)
-                .map_err(|e| SamplingError::Config("rr", e.to_string()))
-        },
-    },
-    SamplerEntry {
-        name: "mir",
-        about: "Metropolis Instant Radiosity (Segovia et al. 2007): light paths by Metropolis-Hastings, VPLs of equal power to the camera",
-        build: |c| {
-            c.needs_indirect("mir")?;
-            MirSampler::new(MirConfig { vpls: c.vpls, bounces: c.bounces(), ..c.mir })
-                .map(|s| Box::new(s) as Box<dyn VplSampler>)
-                .map_err(|e| SamplingError::Config("mir", e.to_string()))
-        },
-    },
-    SamplerEntry {
-        name: "mir-resample",
-        about: "MIR as the SMC paper ran it: 256·I path-tracer camera paths resampled to I VPLs by the light they bring the camera",
-        build: |c| {
-            c.needs_indirect("mir-resample")?;
-            MirResampleSampler::new(MirResampleConfig { vpls: c.vpls, radiosity_bounces: c.max_depth.saturating_sub(3), ..c.mir_resample })
-                .map(|s| Box::new(s) as Box<dyn VplSampler>)
-                .map_err(|e| SamplingError::Config("mir-resample", e.to_string()))
-        },
-    },
-    SamplerEntry {
-        name: "tcas",
-        about: "Temporally coherent adaptive sampling (Barák et al. 2013): Metropolis chains over reflective shadow maps, one bounce",
-        build: |c| {
-            c.needs_indirect("tcas")?;
-            TcasSampler::new(TcasConfig { vpls: c.vpls, ..c.tcas })
-                .map(|s| Box::new(s) as Box<dyn VplSampler>)
-                .map_err(|e| SamplingError::Config("tcas", e.to_string()))
-        },
-    },
-    SamplerEntry {
-        name: "smc",
-        about: "Sequential Monte Carlo Instant Radiosity (Hedman et al. 2017): temporally coherent VPLs on indirectly visible surfaces",
-        build: |c| {
-            c.needs_indirect("smc")?;
-            SmcSampler::new(c.smc_config()).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(|e| SamplingError::Config("smc", e.to_string()))
-        },
-    },
-];
-
-/// Names of the samplers the toolkit plans but this build does not have.
-pub const PLANNED: &[&str] = &[];
-
-/// Builds the sampler called `name`.
-pub fn build(name: &str, config: &SamplerConfig) -> Result<Box<dyn VplSampler>, SamplingError> {
-    let available = SAMPLERS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ");
-    match SAMPLERS.iter().find(|e| e.name == name) {
-        Some(e) => (e.build)(config),
-        None if PLANNED.contains(&name) => Err(SamplingError::NotAvailable(name.into(), available)),
-        None => Err(SamplingError::Unknown(name.into(), available)),
+impl SamplingError {
+    /// Wraps a sampler constructor's error.
+    pub fn sampler(name: &str, source: impl std::error::Error + Send + Sync + 'static) -> SamplingError {
+        SamplingError::Sampler { name: name.into(), source: Box::new(source) }
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// What a sampler is built with: the renderer's budget and depth, the
+/// backend's services, and the registry itself (for samplers that wrap
+/// another one, as RR wraps its candidate source).
+#[derive(Clone, Copy)]
+pub struct SamplerContext<'a> {
+    /// VPL slots and path depth, set once for the whole renderer.
+    pub budget: Budget,
+    /// Ray caster and radiosity estimators of the backend.
+    pub services: &'a Services,
+    /// The registry the sampler is being built from.
+    pub registry: &'a Registry,
+}
 
-    #[test]
-    fn names_resolve_or_explain() {
-        assert_eq!(build("ir", &SamplerConfig::default()).unwrap().name(), "ir");
-        assert_eq!(build("smc", &SamplerConfig::default()).unwrap().name(), "smc");
-        for name in ["rr", "mir", "mir-resample", "tcas"] {
-            assert_eq!(build(name, &SamplerConfig::default()).unwrap().name(), name);
-            assert!(matches!(build(name, &SamplerConfig { max_depth: 2, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
-            assert!(matches!(build(name, &SamplerConfig { vpls: 0, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
+impl SamplerContext<'_> {
+    /// An error when the depth leaves no indirect light for VPLs to carry.
+    pub fn needs_indirect(&self, name: &str) -> Result<(), SamplingError> {
+        if !self.budget.has_indirect() {
+            return Err(SamplingError::Budget(
+                name.into(),
+                format!("max depth {} has no indirect light for VPLs to carry (at least 3)", self.budget.max_depth),
+            ));
         }
-        assert!(matches!(build("smc", &SamplerConfig { max_depth: 2, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
-        let bad = SamplerConfig { smc: SmcConfig { resample_ratio: 0, ..SmcConfig::default() }, ..SamplerConfig::default() };
-        assert!(matches!(build("smc", &bad), Err(SamplingError::Config(..))));
-        assert!(matches!(build("xyz", &SamplerConfig::default()), Err(SamplingError::Unknown(..))));
-        assert!(matches!(build("ir", &SamplerConfig { vpls: 0, ..SamplerConfig::default() }), Err(SamplingError::Config(..))));
+        Ok(())
+    }
+
+    /// An error when the budget holds no VPL.
+    pub fn needs_vpls(&self, name: &str) -> Result<(), SamplingError> {
+        if self.budget.vpls == 0 {
+            return Err(SamplingError::Budget(name.into(), "the VPL budget must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// A radiosity estimator of `paths` paths per estimate and at most
+    /// `max_bounces` scattering vertices after the point: the backend's
+    /// when it offers one, otherwise the CPU path tracer's.
+    pub fn radiosity(&self, paths: u32, max_bounces: u32) -> SharedEstimator {
+        match &self.services.radiosity {
+            Some(make) => make.estimator(paths, max_bounces),
+            None => Box::new(vpl_pathtrace::PathRadiosity { paths, max_bounces }),
+        }
+    }
+
+    /// Builds the sampler `name` with these settings, reading from `params`
+    /// (without checking that every key was read: the outer build does).
+    pub fn build(&self, name: &str, params: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
+        let entry = self.registry.entry(name)?;
+        (entry.build)(self, params)
+    }
+}
+
+/// The constructor of a registered sampler.
+pub type BuildFn = dyn Fn(&SamplerContext, &Params) -> Result<Box<dyn VplSampler>, SamplingError> + Send + Sync;
+
+/// A sampler the registry can build by name.
+#[derive(Clone)]
+pub struct SamplerEntry {
+    /// Name used on the command line and in experiment specs.
+    pub name: String,
+    /// One line about it.
+    pub about: String,
+    /// The parameters it reads, for help texts.
+    pub keys: Vec<ParamKey>,
+    /// Its constructor.
+    pub build: Arc<BuildFn>,
+}
+
+impl std::fmt::Debug for SamplerEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SamplerEntry").field("name", &self.name).field("about", &self.about).field("keys", &self.keys).finish()
+    }
+}
+
+impl SamplerEntry {
+    /// An entry called `name` that `build` constructs.
+    pub fn new(
+        name: impl Into<String>,
+        about: impl Into<String>,
+        build: impl Fn(&SamplerContext, &Params) -> Result<Box<dyn VplSampler>, SamplingError> + Send + Sync + 'static,
+    ) -> SamplerEntry {
+        SamplerEntry { name: name.into(), about: about.into(), keys: Vec::new(), build: Arc::new(build) }
+    }
+
+    /// The same entry, documenting the keys it reads.
+    pub fn with_keys(mut self, keys: &[ParamKey]) -> SamplerEntry {
+        self.keys.extend_from_slice(keys);
+        self
+    }
+}
+
+/// Samplers by name: [`Registry::builtin`] holds the toolkit's, and
+/// [`Registry::register`] adds a user's own, which every tool that takes a
+/// registry (the renderer, `vpl`, Table 1, the benches) can then run.
+#[derive(Clone, Debug, Default)]
+pub struct Registry {
+    entries: Vec<SamplerEntry>,
+}
+
+impl Registry {
+    /// A registry with no samplers.
+    pub fn empty() -> Registry {
+        Registry::default()
+    }
+
+    /// The toolkit's samplers: `ir`, `rr`, `mir`, `mir-resample`, `tcas`, `smc`.
+    pub fn builtin() -> Registry {
+        let mut r = Registry::empty();
+        for e in crate::builtin::entries() {
+            r.register(e).expect("built-in names are distinct");
+        }
+        r
+    }
+
+    /// Adds `entry`; a name already taken is an error.
+    pub fn register(&mut self, entry: SamplerEntry) -> Result<&mut Registry, SamplingError> {
+        if self.entries.iter().any(|e| e.name == entry.name) {
+            return Err(SamplingError::Duplicate(entry.name));
+        }
+        self.entries.push(entry);
+        Ok(self)
+    }
+
+    /// [`Registry::register`] by value, for chaining.
+    pub fn with(mut self, entry: SamplerEntry) -> Result<Registry, SamplingError> {
+        self.register(entry)?;
+        Ok(self)
+    }
+
+    /// Every entry, in the order registered.
+    pub fn entries(&self) -> &[SamplerEntry] {
+        &self.entries
+    }
+
+    /// The names, in the order registered.
+    pub fn names(&self) -> Vec<&str> {
+        self.entries.iter().map(|e| e.name.as_str()).collect()
+    }
+
+    /// Whether a sampler called `name` is registered.
+    pub fn contains(&self, name: &str) -> bool {
+        self.entries.iter().any(|e| e.name == name)
+    }
+
+    /// The entry called `name`.
+    pub fn entry(&self, name: &str) -> Result<&SamplerEntry, SamplingError> {
+        self.entries.iter().find(|e| e.name == name).ok_or_else(|| SamplingError::Unknown(name.into(), self.names().join(", ")))
+    }
+
+    /// Builds the sampler `name` for `budget` with `services`, its settings
+    /// read from `params`; a key of `params` that it does not read is an error.
+    pub fn build(&self, name: &str, budget: Budget, services: &Services, params: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
+        let cx = SamplerContext { budget, services, registry: self };
+        let sampler = cx.build(name, params)?;
+        let keys = params.unused();
+        if !keys.is_empty() {
+            let reads = self.entry(name)?.keys.iter().map(|k| k.key.to_string()).collect();
+            return Err(SamplingError::Unread { name: name.into(), keys: keys.into_iter().map(String::from).collect(), reads });
+        }
+        Ok(sampler)
+    }
+
+    /// [`Registry::build`] on the CPU with default settings.
+    pub fn build_default(&self, name: &str, budget: Budget) -> Result<Box<dyn VplSampler>, SamplingError> {
+        self.build(name, budget, &Services::cpu(), &Params::new())
     }
 }

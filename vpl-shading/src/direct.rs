@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, GBuffer, Image, Purpose, Scene};
+use vpl_core::{GBuffer, Image, Purpose, Scene, stream};
 
 /// Light reflected once at every G-buffer point (single scattering, k = 1).
 ///

@@ -1,6 +1,6 @@
 //! Exhaustive shading: every VPL at every pixel.
 
-use crate::gather::{gather, slice, Sums};
+use crate::gather::{Sums, gather, slice};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::glam::Vec3;

@@ -119,7 +119,15 @@ mod tests {
 
     fn plane(w: u32, h: u32) -> GBuffer {
         let samples = (0..w * h)
-            .map(|i| GSample { p: Vec3::new((i % w) as f32 * 0.01, (i / w) as f32 * 0.01, 0.0), n: Vec3::Z, ng: Vec3::Z, albedo: Vec3::ONE, emitted: Vec3::ZERO, material: 0, depth: 1.0 })
+            .map(|i| GSample {
+                p: Vec3::new((i % w) as f32 * 0.01, (i / w) as f32 * 0.01, 0.0),
+                n: Vec3::Z,
+                ng: Vec3::Z,
+                albedo: Vec3::ONE,
+                emitted: Vec3::ZERO,
+                material: 0,
+                depth: 1.0,
+            })
             .collect();
         GBuffer { width: w, height: h, samples, pixel_angle: 0.01, eye: Vec3::new(0.0, 0.0, 1.0) }
     }

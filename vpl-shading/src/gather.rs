@@ -21,7 +21,17 @@ impl Sums {
 
 /// Adds the contribution of the VPLs in `slots` to `sums` for every
 /// receiver: Σ flux · min(G, G_max) · V. `w` is scratch space.
-pub(crate) fn gather(rx: &Receivers, vpls: &VplSet, slots: &[u32], vis: &dyn VplVisibility, clamp: Option<GeometryClamp>, sums: &mut Sums, w: &mut Vec<f32>) {
+// The lanes index several arrays at once, which is what lets the loops vectorise.
+#[allow(clippy::needless_range_loop)]
+pub(crate) fn gather(
+    rx: &Receivers,
+    vpls: &VplSet,
+    slots: &[u32],
+    vis: &dyn VplVisibility,
+    clamp: Option<GeometryClamp>,
+    sums: &mut Sums,
+    w: &mut Vec<f32>,
+) {
     let n = rx.len();
     let g_max = clamp.map_or(f32::INFINITY, |c| c.g_max);
     if let Some(sm) = vis.as_any().downcast_ref::<ShadowMaps>() {
@@ -65,7 +75,7 @@ const LANES: usize = 8;
 /// eight receivers wide: the arithmetic of [`vpl_visibility::MapView::visible`]
 /// lane by lane, without the weight array and the per-VPL dynamic call.
 fn gather_shadow_maps(rx: &Receivers, vpls: &VplSet, slots: &[u32], sm: &ShadowMaps, g_max: f32, sums: &mut Sums) {
-    use wide::{f32x8, CmpGt, CmpLe};
+    use wide::{CmpGt, CmpLe, f32x8};
     let n = rx.len();
     let full = n / LANES * LANES;
     let load = |a: &[f32], i: usize| f32x8::from(<[f32; LANES]>::try_from(&a[i..i + LANES]).expect("eight lanes"));
@@ -195,7 +205,8 @@ mod tests {
         let setup = SceneSetup::load("cornell").unwrap();
         let camera = setup.camera.with_resolution((37, 29)).unwrap();
         let gbuf: GBuffer = crate::render_gbuffer(&setup.scene, &camera);
-        let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 200, ..Default::default() }).unwrap().sample(&setup.scene, 2).clone();
+        let set =
+            vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 200, ..Default::default() }).unwrap().sample(&setup.scene, 2).clone();
         let mut sm = ShadowMaps::new(64).unwrap();
         sm.update(&setup.scene, &set);
         let opaque = Opaque(sm.clone());

@@ -3,12 +3,12 @@
 //! cross-bilateral filter removes the structured noise (Hedman et al. 2017, §4).
 
 use crate::filter::CrossBilateral;
-use crate::gather::{gather, slice, Sums};
+use crate::gather::{Sums, gather, slice};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
-use vpl_core::{stream, GBuffer, GeometryClamp, Image, IndirectShader, Purpose, VplSet, VplVisibility};
+use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, Purpose, VplSet, VplVisibility, stream};
 
 /// Side of the interleaving tile: 4×4 pixels, 16 VPL subsets.
 pub const TILE: u32 = 4;
@@ -75,7 +75,7 @@ impl InterleavedShader {
             for i in (1..order.len()).rev() {
                 order.swap(i, rng.below(i as u32 + 1) as usize);
             }
-            let mut subsets = vec![Vec::with_capacity(slots / CLASSES + 1); CLASSES];
+            let mut subsets: Vec<Vec<_>> = (0..CLASSES).map(|_| Vec::with_capacity(slots / CLASSES + 1)).collect();
             for (k, s) in order.into_iter().enumerate() {
                 subsets[k % CLASSES].push(s);
             }
@@ -98,7 +98,8 @@ impl InterleavedShader {
             }
         }
         let classes: Vec<_> = pixels.into_iter().map(|p| gbuf.receivers(p)).collect();
-        let tasks: Vec<(usize, usize)> = classes.iter().enumerate().flat_map(|(c, rx)| (0..rx.len()).step_by(CHUNK).map(move |s| (c, s))).collect();
+        let tasks: Vec<(usize, usize)> =
+            classes.iter().enumerate().flat_map(|(c, rx)| (0..rx.len()).step_by(CHUNK).map(move |s| (c, s))).collect();
         let parts: Vec<(usize, usize, Sums)> = tasks
             .into_par_iter()
             .map(|(c, s)| {

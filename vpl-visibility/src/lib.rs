@@ -29,6 +29,21 @@
 //! ```
 //!
 //! [`VplVisibility`]: vpl_core::VplVisibility
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
@@ -38,4 +53,4 @@ mod shadow_maps;
 
 pub use paraboloid::{direction_to_paraboloid, paraboloid_to_direction};
 pub use raytraced::RayTraced;
-pub use shadow_maps::{MapView, ShadowMapError, ShadowMaps, DEFAULT_RESOLUTION, MAX_RESOLUTION};
+pub use shadow_maps::{DEFAULT_RESOLUTION, MAX_RESOLUTION, MapView, ShadowMapError, ShadowMaps};

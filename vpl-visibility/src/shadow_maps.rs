@@ -224,7 +224,8 @@ impl VplVisibility for ShadowMaps {
             }
         }
         let res = self.res;
-        let fresh: Vec<(usize, Map)> = stale.par_iter().map(|&s| (s, Self::render(scene, vpls.get(s).expect("stale slots hold a VPL"), res))).collect();
+        let fresh: Vec<(usize, Map)> =
+            stale.par_iter().map(|&s| (s, Self::render(scene, vpls.get(s).expect("stale slots hold a VPL"), res))).collect();
         for (s, m) in fresh {
             self.maps[s] = Some(m);
         }

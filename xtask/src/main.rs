@@ -70,7 +70,41 @@ fn build_vpl() -> Result<PathBuf, String> {
     let mut c = cargo();
     c.args(["build", "--release", "--quiet", "-p", "vpl-bench", "--bin", "vpl"]);
     run(c, "building vpl")?;
-    Ok(root().join("target/release/vpl"))
+    Ok(target_dir()?.join("release").join(format!("vpl{}", std::env::consts::EXE_SUFFIX)))
+}
+
+/// Cargo's target directory as cargo itself resolves it (`CARGO_TARGET_DIR`,
+/// `build.target-dir` in a config file, or `target/`), from `cargo metadata`.
+fn target_dir() -> Result<PathBuf, String> {
+    let out = cargo().args(["metadata", "--format-version", "1", "--no-deps"]).output().map_err(|e| format!("cargo metadata: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("cargo metadata: {}", String::from_utf8_lossy(&out.stderr).trim()));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    json_string(&text, "target_directory").map(PathBuf::from).ok_or_else(|| "cargo metadata: no target_directory".to_string())
+}
+
+/// The string value of the first `"key":"…"` in JSON text, unescaped.
+fn json_string(text: &str, key: &str) -> Option<String> {
+    let start = text.find(&format!("\"{key}\":\""))? + key.len() + 4;
+    let mut value = String::new();
+    let mut chars = text[start..].chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => return Some(value),
+            '\\' => match chars.next()? {
+                'n' => value.push('\n'),
+                't' => value.push('\t'),
+                'u' => {
+                    let hex: String = chars.by_ref().take(4).collect();
+                    value.push(char::from_u32(u32::from_str_radix(&hex, 16).ok()?)?);
+                }
+                c => value.push(c),
+            },
+            c => value.push(c),
+        }
+    }
+    None
 }
 
 fn test(args: &[String]) -> Result<(), String> {
@@ -120,10 +154,37 @@ const QUICK: Profile = Profile {
     georgiev_spp: 2048,
     georgiev_frames: 8,
     table2: ("640x360", 10),
-    figures: &["--scenes", "office", "--fig10-scenes", "atrium", "--spp", "256", "--fig10-spp", "1024", "--shadow-maps", "128,256", "--fig10-size", "160x120", "--fig10-warmup", "20"],
+    figures: &[
+        "--scenes",
+        "office",
+        "--fig10-scenes",
+        "atrium",
+        "--spp",
+        "256",
+        "--fig10-spp",
+        "1024",
+        "--shadow-maps",
+        "128,256",
+        "--fig10-size",
+        "160x120",
+        "--fig10-warmup",
+        "20",
+    ],
     progressive: &[
-        "--fig7-size", "160x120", "--passes", "512", "--converged", "2048", "--reference-spp", "1024", "--fig8-scenes", "cornell,office,maze", "--fig8-size", "160x120",
-        "--seconds", "10",
+        "--fig7-size",
+        "160x120",
+        "--passes",
+        "512",
+        "--converged",
+        "2048",
+        "--reference-spp",
+        "1024",
+        "--fig8-scenes",
+        "cornell,office,maze",
+        "--fig8-size",
+        "160x120",
+        "--seconds",
+        "10",
     ],
 };
 
@@ -136,12 +197,36 @@ const FULL: Profile = Profile {
     georgiev_frames: 32,
     table2: ("1920x1080", 30),
     figures: &[
-        "--scenes", "office,atrium", "--fig10-scenes", "atrium,courtyard,office", "--spp", "32768", "--fig10-spp", "8192", "--shadow-maps", "128,256,512,1024", "--fig10-size", "320x240",
-        "--fig10-warmup", "100",
+        "--scenes",
+        "office,atrium",
+        "--fig10-scenes",
+        "atrium,courtyard,office",
+        "--spp",
+        "32768",
+        "--fig10-spp",
+        "8192",
+        "--shadow-maps",
+        "128,256,512,1024",
+        "--fig10-size",
+        "320x240",
+        "--fig10-warmup",
+        "100",
     ],
     progressive: &[
-        "--fig7-size", "320x240", "--passes", "2048", "--converged", "11456", "--reference-spp", "16384", "--fig8-scenes", "cornell,office,maze,atrium,corner,courtyard",
-        "--fig8-size", "320x240", "--seconds", "180",
+        "--fig7-size",
+        "320x240",
+        "--passes",
+        "2048",
+        "--converged",
+        "11456",
+        "--reference-spp",
+        "16384",
+        "--fig8-scenes",
+        "cornell,office,maze,atrium,corner,courtyard",
+        "--fig8-size",
+        "320x240",
+        "--seconds",
+        "180",
     ],
 };
 
@@ -249,7 +334,10 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         let t = Instant::now();
         let dir = results.join("scenes");
         std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-        let mut md = format!("## Scene gallery (`scenes/`)\n\nEvery built-in scene at frame 0, path traced (full, max-depth 5, {} spp).\n\n", profile.gallery_spp);
+        let mut md = format!(
+            "## Scene gallery (`scenes/`)\n\nEvery built-in scene at frame 0, path traced (full, max-depth 5, {} spp).\n\n",
+            profile.gallery_spp
+        );
         for (i, s) in SCENES.iter().enumerate() {
             eprintln!("xtask: [scenes {}/{}] {s}", i + 1, SCENES.len());
             render(&vpl, s, "full", profile.gallery_spp, &dir.join(format!("{s}.exr")), None)?;
@@ -273,7 +361,10 @@ fn reproduce(args: &[String]) -> Result<(), String> {
                 let out = dir.join(format!("{s}_{mode}.exr"));
                 render(&vpl, s, mode, profile.reference_spp, &out, Some(&dir.join(format!("{s}_{mode}_stderr.exr"))))?;
             }
-            md.push_str(&format!("| {s} | [exr]({0}_full.exr) ![]({0}_full.png) | [exr]({0}_indirect.exr) ![]({0}_indirect.png) |\n", format!("references/{s}")));
+            md.push_str(&format!(
+                "| {s} | [exr]({0}_full.exr) ![]({0}_full.png) | [exr]({0}_indirect.exr) ![]({0}_indirect.png) |\n",
+                format!("references/{s}")
+            ));
         }
         md.push('\n');
         save_section("references", &md, Some(t.elapsed().as_secs_f64()))?;
@@ -318,7 +409,11 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         if shard.is_none() && dir.exists() {
             std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
         }
-        eprintln!("xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})", profile.name, shard.as_deref().map_or(String::new(), |s| format!(", shard {s}")));
+        eprintln!(
+            "xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})",
+            profile.name,
+            shard.as_deref().map_or(String::new(), |s| format!(", shard {s}"))
+        );
         let mut c = Command::new(&vpl);
         c.current_dir(root()).args(["table1", "--profile", profile.name, "--backend", &backend]).args(&table1_args).arg("--out").arg(&dir);
         if let Some(s) = &shard {
@@ -330,7 +425,10 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         } else {
             save_section(
                 "table1",
-                &format!("## Table 1 (`table1/`)\n\nShard {} of a sharded run is done; when every shard is, `cargo xtask merge` writes the tables here.\n\n", shard.as_deref().unwrap_or("")),
+                &format!(
+                    "## Table 1 (`table1/`)\n\nShard {} of a sharded run is done; when every shard is, `cargo xtask merge` writes the tables here.\n\n",
+                    shard.as_deref().unwrap_or("")
+                ),
                 None,
             )?;
         }
@@ -340,10 +438,15 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         eprintln!("xtask: [table2] SMC stage timings at {}", profile.table2.0);
         let dir = results.join("table2");
         let mut c = Command::new(&vpl);
-        c.current_dir(root()).args(["table2", "--backend", &backend, "--size", profile.table2.0, "--frames", &profile.table2.1.to_string(), "--out"]).arg(&dir);
+        c.current_dir(root())
+            .args(["table2", "--backend", &backend, "--size", profile.table2.0, "--frames", &profile.table2.1.to_string(), "--out"])
+            .arg(&dir);
         run(c, "vpl table2")?;
         let text = std::fs::read_to_string(dir.join("table2.md")).map_err(|e| e.to_string())?;
-        let md = format!("## Table 2 (`table2/`)\n\n{}\n", text.trim_start_matches("# Table 2: milliseconds per stage of an SMC frame\n\n").replace("## ", "### "));
+        let md = format!(
+            "## Table 2 (`table2/`)\n\n{}\n",
+            text.trim_start_matches("# Table 2: milliseconds per stage of an SMC frame\n\n").replace("## ", "### ")
+        );
         save_section("table2", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     for (name, fig) in [("fig8", "8"), ("fig10", "10")] {
@@ -371,13 +474,21 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         run(c, "vpl progressive-figures")?;
         let text = std::fs::read_to_string(dir.join("progressive.md")).map_err(|e| e.to_string())?;
         let body = text.split_once("\n\n").map_or(text.as_str(), |(_, b)| b);
-        let md = format!("## Progressive point-light rendering, Figs. 6-8 of Dammertz et al. (`progressive/`)\n\n{}\n", fix_links(body, "progressive/"));
+        let md = format!(
+            "## Progressive point-light rendering, Figs. 6-8 of Dammertz et al. (`progressive/`)\n\n{}\n",
+            fix_links(body, "progressive/")
+        );
         save_section("progressive", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     save_section(
         "run",
-        &format!("Last run: `cargo xtask reproduce {}` (profile `{}`) on {threads} hardware threads, {:.0} s.\n", args.join(" "), profile.name, start.elapsed().as_secs_f64()),
+        &format!(
+            "Last run: `cargo xtask reproduce {}` (profile `{}`) on {threads} hardware threads, {:.0} s.\n",
+            args.join(" "),
+            profile.name,
+            start.elapsed().as_secs_f64()
+        ),
         None,
     )?;
     write_readme(README_HEADER)?;
@@ -430,4 +541,17 @@ fn render(vpl: &Path, scene: &str, mode: &str, spp: u32, out: &Path, stderr: Opt
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::json_string;
+
+    #[test]
+    fn json_strings_are_found_and_unescaped() {
+        let text = r#"{"packages":[],"target_directory":"/tmp/a \"b\"\\c","version":1}"#;
+        assert_eq!(json_string(text, "target_directory").as_deref(), Some("/tmp/a \"b\"\\c"));
+        assert_eq!(json_string(text, "workspace_root"), None);
+        assert_eq!(json_string(r#"{"k":"\u00e9"}"#, "k").as_deref(), Some("é"));
+    }
 }

@@ -15,8 +15,8 @@
 pub mod report;
 pub mod rows;
 
-use crate::metrics::{temporal_error, tone_mapped_luminance, tone_mapped_stderr, TemporalError};
-use crate::pipeline::{Backend, Pipeline, PipelineSpec, ShadingSpec, VisibilitySpec};
+use crate::metrics::{TemporalError, temporal_error, tone_mapped_luminance, tone_mapped_stderr};
+use crate::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
 use crate::sequence::run_sequence;
 use rows::Row;
 use serde::{Deserialize, Serialize};
@@ -24,9 +24,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::write_atomic;
-use vpl_core::{CoreError, GeometryClamp, Mode};
-use vpl_pathtrace::{track_with, Footprint, PathTracer};
-use vpl_sampling::SamplerConfig;
+use vpl_core::{Budget, CoreError, GeometryClamp, Mode, Params};
+use vpl_pathtrace::{Footprint, PathTracer, track_with};
+use vpl_sampling::Registry;
 
 /// Errors of a Table 1 run.
 #[derive(Debug, thiserror::Error)]
@@ -93,7 +93,7 @@ pub struct Table1Spec {
     pub seed: u64,
     /// Where the VPL stages run (ground truth is always the CPU path tracer).
     #[serde(default)]
-    pub backend: Backend,
+    pub backend: BackendKind,
 }
 
 /// The paper's ground-truth sample count per pixel (§5.2).
@@ -114,7 +114,11 @@ impl Table1Spec {
         Self::with_frames("full", PAPER_TRUTH_SPP, |r| Ok(0..r.frame_count()?))
     }
 
-    fn with_frames(profile: &str, truth_spp: u32, frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, CoreError>) -> Result<Self, Table1Error> {
+    fn with_frames(
+        profile: &str,
+        truth_spp: u32,
+        frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, CoreError>,
+    ) -> Result<Self, Table1Error> {
         let rows = rows::rows()
             .iter()
             .map(|r| {
@@ -131,25 +135,33 @@ impl Table1Spec {
             max_depth: 5,
             shadow_map_res: 128,
             seed: 0,
-            backend: Backend::Cpu,
+            backend: BackendKind::Cpu,
         })
     }
 
-    /// Checks names, frames and settings; says what is wrong in one line.
-    pub fn validate(&self) -> Result<(), Table1Error> {
+    /// Checks names (methods against `registry`), frames and settings;
+    /// says what is wrong in one line.
+    pub fn validate(&self, registry: &Registry) -> Result<(), Table1Error> {
+        self.validate_settings()?;
+        for m in &self.methods {
+            if !registry.contains(m) {
+                return Err(Table1Error::Invalid(format!("unknown method '{m}' (methods: {})", registry.names().join(", "))));
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Table1Spec::validate`] without the methods: sequences, frames, sizes.
+    pub fn validate_settings(&self) -> Result<(), Table1Error> {
         if self.rows.is_empty() || self.methods.is_empty() {
             return Err(Table1Error::Invalid("a run needs at least one sequence and one method".into()));
         }
         for r in &self.rows {
-            let row = rows::row(&r.id).ok_or_else(|| Table1Error::Invalid(format!("unknown sequence '{}' (sequences: {})", r.id, row_ids().join(", "))))?;
+            let row = rows::row(&r.id)
+                .ok_or_else(|| Table1Error::Invalid(format!("unknown sequence '{}' (sequences: {})", r.id, row_ids().join(", "))))?;
             let n = row.frame_count()?;
             if r.start >= r.end || r.end > n {
                 return Err(Table1Error::Invalid(format!("frames {}..{} do not fit {} ({n} frames)", r.start, r.end, r.id)));
-            }
-        }
-        for m in &self.methods {
-            if !vpl_sampling::SAMPLERS.iter().any(|e| e.name == m) {
-                return Err(Table1Error::Invalid(format!("unknown method '{m}' (methods: {})", vpl_sampling::SAMPLERS.iter().map(|e| e.name).collect::<Vec<_>>().join(", "))));
             }
         }
         if self.truth_spp == 0 || self.size.0 == 0 || self.size.1 == 0 {
@@ -237,13 +249,14 @@ impl Shard {
 }
 
 impl std::str::FromStr for Shard {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Shard, String> {
-        let (a, b) = s.split_once('/').ok_or_else(|| format!("'{s}' is not a shard (expected I/N, e.g. 0/4)"))?;
-        let index: u32 = a.trim().parse().map_err(|_| format!("'{a}' is not a shard index"))?;
-        let count: u32 = b.trim().parse().map_err(|_| format!("'{b}' is not a shard count"))?;
+    type Err = Table1Error;
+    fn from_str(s: &str) -> Result<Shard, Table1Error> {
+        let bad = |m: String| Table1Error::Invalid(m);
+        let (a, b) = s.split_once('/').ok_or_else(|| bad(format!("'{s}' is not a shard (expected I/N, e.g. 0/4)")))?;
+        let index: u32 = a.trim().parse().map_err(|_| bad(format!("'{a}' is not a shard index")))?;
+        let count: u32 = b.trim().parse().map_err(|_| bad(format!("'{b}' is not a shard count")))?;
         if count == 0 || index >= count {
-            return Err(format!("shard {index}/{count}: the index must be below the count"));
+            return Err(bad(format!("shard {index}/{count}: the index must be below the count")));
         }
         Ok(Shard { index, count })
     }
@@ -321,11 +334,17 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<(), Table1Error> {
     Ok(())
 }
 
-/// Runs the units of `shard` into `dir` (skipping units whose files exist:
+/// Runs the units of `shard` into `dir`, the methods from `registry` (skipping units whose files exist:
 /// an interrupted run resumes). Writes `spec.json` first; refuses a folder
 /// whose `spec.json` differs.
-pub fn run(spec: &Table1Spec, dir: &Path, shard: Shard, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, Table1Error> {
-    spec.validate()?;
+pub fn run(
+    registry: &Registry,
+    spec: &Table1Spec,
+    dir: &Path,
+    shard: Shard,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RunSummary, Table1Error> {
+    spec.validate(registry)?;
     let start = Instant::now();
     let spec_path = dir.join("spec.json");
     if spec_path.exists() {
@@ -354,7 +373,7 @@ pub fn run(spec: &Table1Spec, dir: &Path, shard: Shard, progress: &mut dyn FnMut
                 let r = rows::row(&spec.rows[row].id).expect("validated");
                 let name = &spec.methods[method];
                 let base = done;
-                let u = run_method(spec, &r, &spec.rows[row], name, &mut |f| {
+                let u = run_method(registry, spec, &r, &spec.rows[row], name, &mut |f| {
                     progress(&Progress { done: base + f, total, message: format!("{} {name}", r.id) });
                 })?;
                 write_json(&path, &u)?;
@@ -378,9 +397,12 @@ pub fn run(spec: &Table1Spec, dir: &Path, shard: Shard, progress: &mut dyn FnMut
 /// the geometry clamp G_max = I / A, and IR with new paths every frame (the
 /// baseline without temporal coherence).
 pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
+    let mut params = Params::new();
+    params.offer("fresh-paths", true);
     PipelineSpec {
         sampler: method.to_string(),
-        config: SamplerConfig { vpls, max_depth: spec.max_depth, fresh_paths: true, ..SamplerConfig::default() },
+        params,
+        budget: Budget::new(vpls, spec.max_depth),
         visibility: VisibilitySpec::ShadowMaps(spec.shadow_map_res),
         shading: ShadingSpec::Interleaved { filter: true },
         clamp: Some(clamp),
@@ -391,19 +413,35 @@ pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: Geomet
     }
 }
 
-fn run_method(spec: &Table1Spec, row: &Row, run: &RowRun, method: &str, on_frame: &mut dyn FnMut(u64)) -> Result<MethodUnit, Table1Error> {
+fn run_method(
+    registry: &Registry,
+    spec: &Table1Spec,
+    row: &Row,
+    run: &RowRun,
+    method: &str,
+    on_frame: &mut dyn FnMut(u64),
+) -> Result<MethodUnit, Table1Error> {
     let start = Instant::now();
     let setup = row.setup()?;
     let clamp = GeometryClamp::for_budget(row.vpls, setup.scene.surface_area());
-    let mut pipeline = Pipeline::new(pipeline_spec(spec, method, row.vpls, clamp)).map_err(Table1Error::Invalid)?;
-    pipeline.gbuffer.fits(spec.size).map_err(Table1Error::Invalid)?;
+    let mut renderer =
+        pipeline_spec(spec, method, row.vpls, clamp).build(registry, &setup.scene).map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    renderer.backend().check_size(spec.size).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut k = 0u64;
-    let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut pipeline, &row.pixels(spec.size), None, &mut |_, _| {
+    let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut renderer, &row.pixels(spec.size), None, &mut |_, _| {
         k += 1;
         on_frame(k);
     })
     .map_err(|e| Table1Error::Invalid(e.to_string()))?;
-    let mut u = MethodUnit { row: row.id.into(), method: method.into(), frames: Vec::new(), tracked: Vec::new(), moved: Vec::new(), ms: Vec::new(), seconds: 0.0 };
+    let mut u = MethodUnit {
+        row: row.id.into(),
+        method: method.into(),
+        frames: Vec::new(),
+        tracked: Vec::new(),
+        moved: Vec::new(),
+        ms: Vec::new(),
+        seconds: 0.0,
+    };
     for f in frames {
         let t = f.timings;
         u.frames.push(f.index);
@@ -422,7 +460,16 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
     let pt = PathTracer::new(spec.max_depth, Mode::Indirect);
     // Rays through the pixel centres: the one point a G-buffer shades per
     // pixel, so edges inside a pixel do not count as VPL error.
-    let t = track_with(&scene, &camera, &pt, &row.pixels(spec.size), spec.truth_spp, spec.seed ^ 0x0074_7275_7468, frame as u64, Footprint::Centre);
+    let t = track_with(
+        &scene,
+        &camera,
+        &pt,
+        &row.pixels(spec.size),
+        spec.truth_spp,
+        spec.seed ^ 0x0074_7275_7468,
+        frame as u64,
+        Footprint::Centre,
+    );
     Ok(TruthUnit {
         row: row.id.into(),
         frame,
@@ -479,7 +526,7 @@ pub struct Table1Results {
 /// naming a missing unit.
 pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Error> {
     let spec: Table1Spec = read_json(&dir.join("spec.json"))?;
-    spec.validate()?;
+    spec.validate_settings()?;
     let units = spec.units();
     let missing: Vec<String> = units.iter().map(|u| spec.unit_file(*u)).filter(|f| !dir.join(f).exists()).collect();
     if let Some(first) = missing.first() {
@@ -504,9 +551,13 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
         for (mi, name) in spec.methods.iter().enumerate() {
             let u: MethodUnit = read_json(&dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })))?;
             if u.frames.len() != truth.len() {
-                return Err(Table1Error::Unit(dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })), "frame count differs from the spec".into()));
+                return Err(Table1Error::Unit(
+                    dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })),
+                    "frame count differs from the spec".into(),
+                ));
             }
-            let lum: Vec<Vec<f64>> = u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
+            let lum: Vec<Vec<f64>> =
+                u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
             let error = temporal_error(&lum, &truth)?;
             let median_moved = crate::stages::median(u.moved.iter().skip(1).map(|&m| m as f64).collect());
             methods.push(MethodResult { method: name.clone(), error, luminance: lum, median_moved });

@@ -4,7 +4,7 @@
 
 use super::rows::{self, PAPER_METHODS};
 use super::{MethodUnit, RowResult, Table1Error, Table1Results};
-use crate::plot::{line_chart, method_color, Chart, Series};
+use crate::plot::{Chart, Series, line_chart, method_color};
 use crate::stages::median;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -74,12 +74,16 @@ pub fn markdown(r: &Table1Results) -> String {
         s.size.1,
         s.seed,
         match s.backend {
-            crate::pipeline::Backend::Cpu => "CPU",
-            crate::pipeline::Backend::Gpu => "GPU",
+            crate::pipeline::BackendKind::Cpu => "CPU",
+            crate::pipeline::BackendKind::Gpu => "GPU",
         }
     );
     for (title, get, paper) in [
-        ("Average |E|", (|m: &super::MethodResult| m.error.e) as fn(&super::MethodResult) -> f64, (|p: &rows::PaperRow| p.e) as fn(&rows::PaperRow) -> [f64; 4]),
+        (
+            "Average |E|",
+            (|m: &super::MethodResult| m.error.e) as fn(&super::MethodResult) -> f64,
+            (|p: &rows::PaperRow| p.e) as fn(&rows::PaperRow) -> [f64; 4],
+        ),
         ("Average |E′|", |m| m.error.e_prime, |p| p.e_prime),
     ] {
         let _ = writeln!(md, "## {title}\n");
@@ -154,22 +158,42 @@ pub fn markdown(r: &Table1Results) -> String {
     }
     md.push_str("\n## Tracked pixels\n\n");
     for row in &r.rows {
-        let _ = writeln!(md, "- `{}`: {}", row.id, row.pixels.iter().enumerate().map(|(i, ((x, y), l))| format!("{i} ({x}, {y}) {l}")).collect::<Vec<_>>().join("; "));
+        let _ = writeln!(
+            md,
+            "- `{}`: {}",
+            row.id,
+            row.pixels.iter().enumerate().map(|(i, ((x, y), l))| format!("{i} ({x}, {y}) {l}")).collect::<Vec<_>>().join("; ")
+        );
     }
     md
 }
 
 /// `table1.csv`: one line per sequence and method.
 pub fn csv(r: &Table1Results) -> String {
-    let mut s = String::from("sequence,scene,vpls,frame_start,frame_end,method,e,e_prime,bias,count,count_prime,truth_stderr,median_moved,paper_e,paper_e_prime\n");
+    let mut s = String::from(
+        "sequence,scene,vpls,frame_start,frame_end,method,e,e_prime,bias,count,count_prime,truth_stderr,median_moved,paper_e,paper_e_prime\n",
+    );
     for row in &r.rows {
         let p = rows::row(&row.id).expect("known row").paper;
         for m in &row.methods {
-            let (pe, pp) = paper_index(&m.method).map_or((String::new(), String::new()), |i| (p.e[i].to_string(), p.e_prime[i].to_string()));
+            let (pe, pp) =
+                paper_index(&m.method).map_or((String::new(), String::new()), |i| (p.e[i].to_string(), p.e_prime[i].to_string()));
             let _ = writeln!(
                 s,
                 "{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.6},{},{pe},{pp}",
-                row.id, row.scene, row.vpls, row.frames.0, row.frames.1, m.method, m.error.e, m.error.e_prime, m.error.bias, m.error.count, m.error.count_prime, row.truth_stderr, m.median_moved
+                row.id,
+                row.scene,
+                row.vpls,
+                row.frames.0,
+                row.frames.1,
+                m.method,
+                m.error.e,
+                m.error.e_prime,
+                m.error.bias,
+                m.error.count,
+                m.error.count_prime,
+                row.truth_stderr,
+                m.median_moved
             );
         }
     }
@@ -181,7 +205,19 @@ pub fn runs_csv(runs: &[MethodUnit]) -> String {
     let mut s = String::from("sequence,method,frames,seconds,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,total_ms\n");
     for u in runs {
         let med = |i: usize| median(u.ms.iter().skip(1).map(|m| m[i]).collect());
-        let _ = writeln!(s, "{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}", u.row, u.method, u.frames.len(), u.seconds, med(0), med(1), med(2), med(3), med(4));
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            u.row,
+            u.method,
+            u.frames.len(),
+            u.seconds,
+            med(0),
+            med(1),
+            med(2),
+            med(3),
+            med(4)
+        );
     }
     s
 }

@@ -105,7 +105,13 @@ pub fn rows() -> Vec<Row> {
             ],
             fig7_pixel: 6,
             sun_keys: &[],
-            paper: PaperRow { scene: "Soda Hall", lights: "14 (static)", seconds: 30.0, e: [0.0262, 0.0551, 0.0526, 0.0206], e_prime: [0.0098, 0.0077, 0.0057, 0.0044] },
+            paper: PaperRow {
+                scene: "Soda Hall",
+                lights: "14 (static)",
+                seconds: 30.0,
+                e: [0.0262, 0.0551, 0.0526, 0.0206],
+                e_prime: [0.0098, 0.0077, 0.0057, 0.0044],
+            },
         },
         Row {
             id: "courtyard",
@@ -115,7 +121,13 @@ pub fn rows() -> Vec<Row> {
             tracked: COURTYARD_PIXELS,
             fig7_pixel: 1,
             sun_keys: &[],
-            paper: PaperRow { scene: "Epic Citadel", lights: "1 (static)", seconds: 23.0, e: [0.0492, 0.0827, 0.0626, 0.0473], e_prime: [0.0241, 0.0364, 0.0227, 0.0222] },
+            paper: PaperRow {
+                scene: "Epic Citadel",
+                lights: "1 (static)",
+                seconds: 23.0,
+                e: [0.0492, 0.0827, 0.0626, 0.0473],
+                e_prime: [0.0241, 0.0364, 0.0227, 0.0222],
+            },
         },
         Row {
             id: "maze",
@@ -134,7 +146,13 @@ pub fn rows() -> Vec<Row> {
             ],
             fig7_pixel: 4,
             sun_keys: &[],
-            paper: PaperRow { scene: "Maze", lights: "13 (static)", seconds: 22.0, e: [0.0287, 0.0869, 0.0380, 0.0221], e_prime: [0.0216, 0.0132, 0.0113, 0.0075] },
+            paper: PaperRow {
+                scene: "Maze",
+                lights: "13 (static)",
+                seconds: 22.0,
+                e: [0.0287, 0.0869, 0.0380, 0.0221],
+                e_prime: [0.0216, 0.0132, 0.0113, 0.0075],
+            },
         },
         Row {
             id: "atrium",
@@ -153,7 +171,13 @@ pub fn rows() -> Vec<Row> {
             ],
             fig7_pixel: 3,
             sun_keys: &[],
-            paper: PaperRow { scene: "Crytek Sponza", lights: "1 (dynamic)", seconds: 20.0, e: [0.0288, 0.0215, 0.0352, 0.0962], e_prime: [0.0072, 0.0044, 0.0027, 0.0014] },
+            paper: PaperRow {
+                scene: "Crytek Sponza",
+                lights: "1 (dynamic)",
+                seconds: 20.0,
+                e: [0.0288, 0.0215, 0.0352, 0.0962],
+                e_prime: [0.0072, 0.0044, 0.0027, 0.0014],
+            },
         },
         Row {
             id: "courtyard-sun",
@@ -163,7 +187,13 @@ pub fn rows() -> Vec<Row> {
             tracked: COURTYARD_PIXELS,
             fig7_pixel: 1,
             sun_keys: &MOVING_SUN,
-            paper: PaperRow { scene: "Epic Citadel", lights: "1 (dynamic)", seconds: 21.0, e: [0.0246, 0.0892, 0.0650, 0.0240], e_prime: [0.0129, 0.0323, 0.0198, 0.0071] },
+            paper: PaperRow {
+                scene: "Epic Citadel",
+                lights: "1 (dynamic)",
+                seconds: 21.0,
+                e: [0.0246, 0.0892, 0.0650, 0.0240],
+                e_prime: [0.0129, 0.0323, 0.0198, 0.0071],
+            },
         },
     ]
 }

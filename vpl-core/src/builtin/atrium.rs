@@ -2,7 +2,7 @@
 //! long sides, closed ends, open to a black sky) with one point light that
 //! moves down the court and back while the camera pans.
 
-use super::{horizontal, wall_x, wall_z, Builtin};
+use super::{Builtin, horizontal, wall_x, wall_z};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene_file::{CameraKeySpec, LightKeySpec, LightSpec, SequenceSpec};
@@ -50,7 +50,13 @@ pub fn build() -> Builtin {
             let x = -hx + 4.2 + k as f32 * 5.4;
             let m = if k % 2 == 0 { red } else { blue };
             let z = z_in - side * 0.35;
-            mesh.push_quad(Vec3::new(x - 1.0, STOREY + 0.5, z), Vec3::new(x + 1.0, STOREY + 0.5, z), Vec3::new(x + 1.0, 2.0 * STOREY - 1.3, z), Vec3::new(x - 1.0, 2.0 * STOREY - 1.3, z), m);
+            mesh.push_quad(
+                Vec3::new(x - 1.0, STOREY + 0.5, z),
+                Vec3::new(x + 1.0, STOREY + 0.5, z),
+                Vec3::new(x + 1.0, 2.0 * STOREY - 1.3, z),
+                Vec3::new(x - 1.0, 2.0 * STOREY - 1.3, z),
+                m,
+            );
         }
     }
     let lights = vec![LightSpec::Point { position: [-12.0, 2.5, 0.0], intensity: [90.0, 80.0, 65.0] }];

@@ -3,7 +3,7 @@
 //! winding), its materials, light and camera. Back faces are black, as with
 //! Mitsuba's one-sided `diffuse` BSDF.
 
-use super::{camera, Builtin};
+use super::{Builtin, camera};
 use crate::material::Material;
 use crate::mesh::{Mesh, TriangleDesc};
 use crate::scene_file::{CameraKeySpec, SequenceSpec};

@@ -1,7 +1,7 @@
 //! `corner`: an L-shaped corridor; a point light sits around the corner behind
 //! the camera, so what the camera sees is lit only after two or more bounces.
 
-use super::{horizontal, wall_x, wall_z, Builtin};
+use super::{Builtin, horizontal, wall_x, wall_z};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene_file::{CameraKeySpec, LightSpec, SequenceSpec};
@@ -33,6 +33,7 @@ pub fn build() -> Builtin {
     mesh.push_box(Vec3::new(1.4, 0.0, -12.5), Vec3::new(2.3, 1.4, -11.4), crate_m, true);
     let lights = vec![LightSpec::Point { position: [9.0, 2.0, 1.25], intensity: [240.0, 220.0, 190.0] }];
     let ck = |t: f32, z: f32| CameraKeySpec { t, origin: [1.25, 1.6, z], target: [1.1, 1.2, z - 6.0] };
-    let sequence = SequenceSpec { fps: 30.0, duration: 20.0, camera: vec![ck(0.0, 0.5), ck(10.0, -4.0), ck(20.0, 0.5)], lights: Vec::new() };
+    let sequence =
+        SequenceSpec { fps: 30.0, duration: 20.0, camera: vec![ck(0.0, 0.5), ck(10.0, -4.0), ck(20.0, 0.5)], lights: Vec::new() };
     Builtin::from_sequence("corner", mesh, materials, lights, sequence, 65.0)
 }

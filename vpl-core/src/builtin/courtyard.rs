@@ -2,10 +2,10 @@
 //! camera walks a street at eye height into the square. Most sunlit surfaces
 //! (roofs, upper walls facing away) cannot be seen from the street.
 
-use super::{horizontal, walk, Builtin};
+use super::{Builtin, horizontal, walk};
 use crate::material::Material;
 use crate::mesh::Mesh;
-use crate::rng::{stream, Purpose};
+use crate::rng::{Purpose, stream};
 use crate::scene_file::LightSpec;
 use glam::Vec3;
 

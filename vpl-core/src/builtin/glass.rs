@@ -3,7 +3,7 @@
 //! 0.3 … 0.9 (Dammertz et al. 2010, §4: κ < 0.2 is diffuse). Until the
 //! progressive renderer exists every material renders by its diffuse albedo.
 
-use super::{horizontal, wall_x, wall_z, Builtin};
+use super::{Builtin, horizontal, wall_x, wall_z};
 use crate::material::{Layered, Material};
 use crate::mesh::Mesh;
 use crate::scene_file::{CameraKeySpec, SequenceSpec};
@@ -49,7 +49,13 @@ pub fn build() -> Builtin {
     wall_x(&mut mesh, 3.0, -3.0, 3.0, 3.0, &[], green);
     horizontal(&mut mesh, -0.6, 0.6, -0.6, 0.6, 2.99, false, light);
     // Mirror panel in front of the back wall.
-    mesh.push_quad(Vec3::new(-2.5, 0.8, -2.98), Vec3::new(-2.5, 2.6, -2.98), Vec3::new(-0.8, 2.6, -2.98), Vec3::new(-0.8, 0.8, -2.98), mirror);
+    mesh.push_quad(
+        Vec3::new(-2.5, 0.8, -2.98),
+        Vec3::new(-2.5, 2.6, -2.98),
+        Vec3::new(-0.8, 2.6, -2.98),
+        Vec3::new(-0.8, 0.8, -2.98),
+        mirror,
+    );
     mesh.push_sphere(Vec3::new(1.2, 0.8, -0.8), 0.8, 24, 48, glass);
     for (i, _) in KAPPAS.iter().enumerate() {
         let x = -2.5 + i as f32 * 0.5;
@@ -57,5 +63,13 @@ pub fn build() -> Builtin {
     }
     let ck = |t: f32, x: f32| CameraKeySpec { t, origin: [x, 1.5, 7.0], target: [0.0, 1.2, 0.0] };
     let sequence = SequenceSpec { fps: 30.0, duration: 20.0, camera: vec![ck(0.0, 0.0), ck(10.0, 1.5), ck(20.0, 0.0)], lights: Vec::new() };
-    Builtin { name: "glass", mesh, materials, lights: Vec::new(), camera: super::camera([0.0, 1.5, 7.0], [0.0, 1.2, 0.0], 45.0, [320, 240]), sequence, two_sided: true }
+    Builtin {
+        name: "glass",
+        mesh,
+        materials,
+        lights: Vec::new(),
+        camera: super::camera([0.0, 1.5, 7.0], [0.0, 1.2, 0.0], 45.0, [320, 240]),
+        sequence,
+        two_sided: true,
+    }
 }

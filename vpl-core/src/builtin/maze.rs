@@ -2,10 +2,10 @@
 //! the camera walks the corridor from the entrance cell to the farthest cell.
 //! Walls come from a depth-first maze carved with a fixed seed.
 
-use super::{ceiling_lamp, horizontal, walk, Builtin};
+use super::{Builtin, ceiling_lamp, horizontal, walk};
 use crate::material::Material;
 use crate::mesh::Mesh;
-use crate::rng::{stream, Purpose};
+use crate::rng::{Purpose, stream};
 use glam::Vec3;
 
 const N: usize = 7;
@@ -23,16 +23,28 @@ pub fn build() -> Builtin {
     seen[0][0] = true;
     while let Some(&(i, j)) = stack.last() {
         let mut nb = Vec::new();
-        if i + 1 < N && !seen[i + 1][j] { nb.push((i + 1, j)); }
-        if i > 0 && !seen[i - 1][j] { nb.push((i - 1, j)); }
-        if j + 1 < N && !seen[i][j + 1] { nb.push((i, j + 1)); }
-        if j > 0 && !seen[i][j - 1] { nb.push((i, j - 1)); }
+        if i + 1 < N && !seen[i + 1][j] {
+            nb.push((i + 1, j));
+        }
+        if i > 0 && !seen[i - 1][j] {
+            nb.push((i - 1, j));
+        }
+        if j + 1 < N && !seen[i][j + 1] {
+            nb.push((i, j + 1));
+        }
+        if j > 0 && !seen[i][j - 1] {
+            nb.push((i, j - 1));
+        }
         if nb.is_empty() {
             stack.pop();
             continue;
         }
         let (a, b) = nb[rng.below(nb.len() as u32) as usize];
-        if a != i { open_x[i.min(a)][j] = true } else { open_z[i][j.min(b)] = true }
+        if a != i {
+            open_x[i.min(a)][j] = true
+        } else {
+            open_z[i][j.min(b)] = true
+        }
         seen[a][b] = true;
         parent[a][b] = Some((i, j));
         stack.push((a, b));

@@ -11,8 +11,8 @@
 //! | `glass` | Dammertz et al.'s box scenes | glass, a mirror, glossy spheres κ = 0 … 0.9 |
 
 mod atrium;
-mod corner;
 mod cornell;
+mod corner;
 mod courtyard;
 mod glass;
 mod maze;
@@ -50,7 +50,14 @@ pub struct Builtin {
 impl Builtin {
     /// A two-sided scene whose camera starts at the first key of `sequence`
     /// (320×240, field of view `fov` degrees across the smaller side).
-    fn from_sequence(name: &'static str, mesh: Mesh, materials: Vec<Material>, lights: Vec<LightSpec>, sequence: SequenceSpec, fov: f32) -> Builtin {
+    fn from_sequence(
+        name: &'static str,
+        mesh: Mesh,
+        materials: Vec<Material>,
+        lights: Vec<LightSpec>,
+        sequence: SequenceSpec,
+        fov: f32,
+    ) -> Builtin {
         let c0 = &sequence.camera[0];
         let camera = camera(c0.origin, c0.target, fov, [320, 240]);
         Builtin { name, mesh, materials, lights, camera, sequence, two_sided: true }
@@ -124,6 +131,7 @@ fn wall_z(mesh: &mut Mesh, z: f32, x0: f32, x1: f32, h: f32, doors: &[(f32, f32,
 }
 
 /// A horizontal rectangle at height `y` facing up (`up = true`) or down.
+#[allow(clippy::too_many_arguments)] // the rectangle's four bounds, height, side and material read best in place
 fn horizontal(mesh: &mut Mesh, x0: f32, x1: f32, z0: f32, z1: f32, y: f32, up: bool, m: u32) {
     let (a, b, c, d) = (Vec3::new(x0, y, z0), Vec3::new(x0, y, z1), Vec3::new(x1, y, z1), Vec3::new(x1, y, z0));
     if up { mesh.push_quad(a, b, c, d, m) } else { mesh.push_quad(a, d, c, b, m) }
@@ -148,6 +156,14 @@ mod tests {
             assert!(!s.scene.lights.is_empty());
             let last = seq.frame_count() - 1;
             s.frame(last).unwrap();
+        }
+    }
+
+    #[test]
+    #[cfg(feature = "formats")]
+    fn every_builtin_exports_and_loads_again() {
+        for name in NAMES {
+            let s = SceneSetup::builtin(name).unwrap();
             // Export and load again: same scene description.
             let toml = s.to_toml();
             let f = crate::scene_file::SceneFile::parse(&toml, std::path::Path::new("x.toml")).unwrap();

@@ -3,7 +3,7 @@
 //! down the corridor); the camera walks the corridor and rooms come into view
 //! at its far end. Most rooms are invisible from the corridor: VPLs there are wasted.
 
-use super::{ceiling_lamp, horizontal, wall_x, wall_z, Builtin};
+use super::{Builtin, ceiling_lamp, horizontal, wall_x, wall_z};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene_file::{CameraKeySpec, SequenceSpec};

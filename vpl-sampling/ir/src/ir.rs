@@ -3,8 +3,12 @@
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::light::channel_mean;
+use vpl_core::params::FromParam;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{stream, Frame, Halton, LightPathGenerator, LocalFrame, Purpose, Ray, Scene, Vpl, VplSampler, VplSet};
+use vpl_core::{
+    Budget, Frame, Halton, LightPathGenerator, LocalFrame, ParamError, ParamKey, Params, Purpose, Ray, Scene, Stats, Vpl, VplSampler,
+    VplSet, stream,
+};
 
 /// How light paths draw their numbers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -16,13 +20,13 @@ pub enum PathSampling {
     Halton,
 }
 
-impl std::str::FromStr for PathSampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "random" => Ok(PathSampling::Random),
-            "halton" => Ok(PathSampling::Halton),
-            _ => Err(format!("unknown path sampling '{s}' (random, halton)")),
+impl FromParam for PathSampling {
+    const EXPECTED: &'static str = "random or halton";
+    fn from_param(text: &str) -> Option<Self> {
+        match text.trim() {
+            "random" => Some(PathSampling::Random),
+            "halton" => Some(PathSampling::Halton),
+            _ => None,
         }
     }
 }
@@ -46,6 +50,26 @@ pub struct IrConfig {
 impl Default for IrConfig {
     fn default() -> Self {
         IrConfig { vpls: 2048, bounces: 3, sampling: PathSampling::Random, fresh_paths: false }
+    }
+}
+
+impl IrConfig {
+    /// The keys [`IrConfig::from_params`] reads.
+    pub const KEYS: &'static [ParamKey] = &[
+        ParamKey { key: "path-sampling", default: "random", about: "how light paths draw their numbers: random or halton" },
+        ParamKey { key: "fresh-paths", default: "false", about: "new light paths every frame (without it a static scene keeps its VPLs)" },
+    ];
+
+    /// The settings of `budget` (I and `max_depth − 2` bounces), changed by
+    /// `p`'s keys ([`IrConfig::KEYS`]).
+    pub fn from_params(budget: &Budget, p: &Params) -> Result<IrConfig, ParamError> {
+        let d = IrConfig::default();
+        Ok(IrConfig {
+            vpls: budget.vpls,
+            bounces: budget.bounces(),
+            sampling: p.get_or("path-sampling", d.sampling)?,
+            fresh_paths: p.get_or("fresh-paths", d.fresh_paths)?,
+        })
     }
 }
 
@@ -143,17 +167,19 @@ impl InstantRadiosity {
         let IrConfig { bounces, sampling, fresh_paths, .. } = self.config;
         let frame = if fresh_paths { index } else { 0 };
         let plan = path_plan(budget, bounces, mean_albedo(scene));
-        let offsets: Vec<usize> = plan.iter().scan(0, |acc, &n| {
-            let o = *acc;
-            *acc += n;
-            Some(o)
-        }).collect();
-        let n_paths = plan.first().copied().unwrap_or(0);
-        let halton = (sampling == PathSampling::Halton).then(|| Halton::new(dims(bounces), seed.wrapping_add(frame.wrapping_mul(0x9E37_79B9_7F4A_7C15))));
-        let vpls: Vec<(usize, Vpl)> = (0..n_paths)
-            .into_par_iter()
-            .flat_map_iter(|i| trace_path(scene, i, &plan, &offsets, (seed, frame), halton.as_ref()))
+        let offsets: Vec<usize> = plan
+            .iter()
+            .scan(0, |acc, &n| {
+                let o = *acc;
+                *acc += n;
+                Some(o)
+            })
             .collect();
+        let n_paths = plan.first().copied().unwrap_or(0);
+        let halton = (sampling == PathSampling::Halton)
+            .then(|| Halton::new(dims(bounces), seed.wrapping_add(frame.wrapping_mul(0x9E37_79B9_7F4A_7C15))));
+        let vpls: Vec<(usize, Vpl)> =
+            (0..n_paths).into_par_iter().flat_map_iter(|i| trace_path(scene, i, &plan, &offsets, (seed, frame), halton.as_ref())).collect();
         Batch { vpls, planned: plan.iter().sum(), light_paths: n_paths }
     }
 }
@@ -193,12 +219,14 @@ impl VplSampler for InstantRadiosity {
         self.sample_frame(frame.scene, frame.seed, frame.index)
     }
 
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
-        format!(
-            "ir: {} of {} VPLs stored from {} light paths ({} planned, {} lost to paths that left the scene or were absorbed)",
-            s.stored, s.budget, s.light_paths, s.planned, s.lost
-        )
+        Stats::new()
+            .count("stored", s.stored)
+            .count("budget", s.budget)
+            .count("light_paths", s.light_paths)
+            .count("planned", s.planned)
+            .count("lost", s.lost)
     }
 }
 
@@ -242,7 +270,14 @@ pub fn path_plan(budget: usize, bounces: u32, rho: f32) -> Vec<usize> {
 }
 
 /// Light path `i`: the VPLs it stores, with their slots.
-fn trace_path(scene: &Scene, i: usize, plan: &[usize], offsets: &[usize], (seed, frame): (u64, u64), halton: Option<&Halton>) -> Vec<(usize, Vpl)> {
+fn trace_path(
+    scene: &Scene,
+    i: usize,
+    plan: &[usize],
+    offsets: &[usize],
+    (seed, frame): (u64, u64),
+    halton: Option<&Halton>,
+) -> Vec<(usize, Vpl)> {
     let mut rng = stream(seed, frame, Purpose::LIGHT_PATH, i as u64);
     let mut dim = 0usize;
     let mut next = || -> f32 {
@@ -323,7 +358,8 @@ mod tests {
     #[test]
     fn bounce_counts_follow_the_plan() {
         let scene = SceneSetup::load("cornell").unwrap().scene;
-        let mut ir = InstantRadiosity::new(IrConfig { vpls: 1000, bounces: 2, sampling: PathSampling::Halton, fresh_paths: false }).unwrap();
+        let mut ir =
+            InstantRadiosity::new(IrConfig { vpls: 1000, bounces: 2, sampling: PathSampling::Halton, fresh_paths: false }).unwrap();
         let set = ir.sample(&scene, 1);
         let plan = path_plan(1000, 2, mean_albedo(&scene));
         let b1 = set.iter().filter(|(_, v)| v.bounce == 1).count();

@@ -32,10 +32,25 @@
 //! // The open front of the box lets about a quarter of the light paths escape.
 //! assert!(set.stored() > 150 && set.stored() <= 256);
 //! ```
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
 mod ir;
 
-pub use vpl_core::Halton;
 pub use ir::{InstantRadiosity, IrConfig, IrError, IrStats, PathSampling};
+pub use vpl_core::Halton;

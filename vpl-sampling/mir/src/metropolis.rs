@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 use vpl_core::image::luminance;
 use vpl_core::importons::Importons;
-use vpl_core::{stream, Frame, Purpose, Scene, Vpl, VplSampler, VplSet};
+use vpl_core::{Frame, Purpose, Scene, Stats, Vpl, VplSampler, VplSet, stream};
 
 /// Counts of the last frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -57,7 +57,9 @@ struct Target<'a> {
 impl Target<'_> {
     fn eval(&self, u: Vec<f32>, id: u64) -> State {
         let vpl = path_vpl(self.scene, &u, self.bounces, id);
-        let f = vpl.map_or(0.0, |v| self.importons.mean_contribution(self.scene, &v, true, None) as f64 + self.defensive * luminance(v.flux) as f64);
+        let f = vpl.map_or(0.0, |v| {
+            self.importons.mean_contribution(self.scene, &v, true, None) as f64 + self.defensive * luminance(v.flux) as f64
+        });
         State { u, vpl, f: if f.is_finite() { f } else { 0.0 } }
     }
 }
@@ -80,6 +82,7 @@ impl VplSampler for MirSampler {
         "mir"
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
     fn next_frame(&mut self, frame: &Frame) -> &VplSet {
         let start = Instant::now();
         let c = self.config;
@@ -104,23 +107,30 @@ impl VplSampler for MirSampler {
         // κ = E[Φ̃_cam] / E[lum Φ]: the defensive term integrates to δ·E[Φ̃_cam].
         let kappa = if flux > 0.0 { cam / flux } else { 0.0 };
         target.defensive = c.defensive as f64 * kappa;
-        let boot: Vec<State> = boot.into_iter().map(|s| {
-            let extra = s.vpl.map_or(0.0, |v| target.defensive * luminance(v.flux) as f64);
-            State { f: s.f + extra, ..s }
-        }).collect();
+        let boot: Vec<State> = boot
+            .into_iter()
+            .map(|s| {
+                let extra = s.vpl.map_or(0.0, |v| target.defensive * luminance(v.flux) as f64);
+                State { f: s.f + extra, ..s }
+            })
+            .collect();
         let b = boot.iter().map(|s| s.f).sum::<f64>() / n_boot as f64;
         let useful = boot.iter().filter(|s| s.f > 0.0).count();
 
         self.set.begin_frame();
         if !(b > 0.0) {
             (0..c.vpls).for_each(|s| self.set.set(s, None));
-            self.stats = MirStats { stored: 0, b, bootstrap_useful: useful, steps: 0, accepted: 0, ms: start.elapsed().as_secs_f64() * 1e3 };
+            self.stats =
+                MirStats { stored: 0, b, bootstrap_useful: useful, steps: 0, accepted: 0, ms: start.elapsed().as_secs_f64() * 1e3 };
             return &self.set;
         }
-        let cdf: Vec<f64> = boot.iter().scan(0.0, |acc, s| {
-            *acc += s.f;
-            Some(*acc)
-        }).collect();
+        let cdf: Vec<f64> = boot
+            .iter()
+            .scan(0.0, |acc, s| {
+                *acc += s.f;
+                Some(*acc)
+            })
+            .collect();
         let total = *cdf.last().unwrap_or(&0.0);
 
         // Chains: chain k starts from a bootstrap path drawn in proportion to
@@ -177,18 +187,15 @@ impl VplSampler for MirSampler {
         &self.set
     }
 
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
-        format!(
-            "mir: {} of {} VPLs of equal power; b {:.3e} from {} bootstrap paths ({} useful); {} of {} steps accepted; {:.1} ms",
-            s.stored,
-            self.config.vpls,
-            s.b,
-            self.config.bootstrap.unwrap_or(self.config.vpls.max(256)),
-            s.bootstrap_useful,
-            s.accepted,
-            s.steps,
-            s.ms
-        )
+        Stats::new()
+            .count("stored", s.stored)
+            .value("b", s.b)
+            .count("bootstrap_paths", self.config.bootstrap.unwrap_or(self.config.vpls.max(256)))
+            .count("bootstrap_useful", s.bootstrap_useful)
+            .count("steps", s.steps as usize)
+            .count("accepted", s.accepted as usize)
+            .ms("ms", s.ms)
     }
 }

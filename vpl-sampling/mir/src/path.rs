@@ -65,7 +65,7 @@ pub fn uniform(u: &mut [f32], rng: &mut RngStream) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vpl_core::{stream, Purpose, SceneSetup};
+    use vpl_core::{Purpose, SceneSetup, stream};
 
     /// The mean flux of uniform paths equals the total flux of an IR set
     /// (both estimate Σ_j of the light reflected at bounce j, over π): a
@@ -83,7 +83,14 @@ mod tests {
             .collect();
         let (m, se) = mean_se(&xs);
         let ir = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 4096, bounces: 3, ..Default::default() }).unwrap();
-        let ys: Vec<f64> = (0..16).map(|s| vpl_core::LightPathGenerator::generate(&ir, &scene, 4096, s, 0).iter().map(|v| vpl_core::light::channel_mean(v.flux) as f64).sum()).collect();
+        let ys: Vec<f64> = (0..16)
+            .map(|s| {
+                vpl_core::LightPathGenerator::generate(&ir, &scene, 4096, s, 0)
+                    .iter()
+                    .map(|v| vpl_core::light::channel_mean(v.flux) as f64)
+                    .sum()
+            })
+            .collect();
         let (mi, sei) = mean_se(&ys);
         let z = (m - mi) / (se * se + sei * sei).sqrt();
         assert!(z.abs() < 4.0, "paths {m:.4} ± {se:.4}, IR {mi:.4} ± {sei:.4}, z {z:.2}");

@@ -11,7 +11,7 @@ use vpl_core::image::luminance;
 use vpl_core::resample::resample;
 use vpl_core::rng::mix64;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{stream, Frame, LocalFrame, Mode, Purpose, RadiosityEstimator, Ray, SurfacePoint, Vpl, VplSampler, VplSet};
+use vpl_core::{Frame, LocalFrame, Mode, Purpose, RadiosityEstimator, Ray, Stats, SurfacePoint, Vpl, VplSampler, VplSet, stream};
 use vpl_density::{rendering_k, set_densities};
 use vpl_pathtrace::{PathRadiosity, PathTracer};
 
@@ -101,7 +101,8 @@ impl VplSampler for MirResampleSampler {
         let chosen = if weights.is_empty() { Vec::new() } else { resample(&weights, c.vpls, 8, seed, index) };
 
         let est = PathRadiosity { paths: c.radiosity_paths, max_bounces: c.radiosity_bounces };
-        let radiance: Vec<Vec3> = chosen.par_iter().map(|&i| est.radiosity(scene, &useful[i].y, mix64(seed ^ mix64(index ^ (i as u64) << 20)))).collect();
+        let radiance: Vec<Vec3> =
+            chosen.par_iter().map(|&i| est.radiosity(scene, &useful[i].y, mix64(seed ^ mix64(index ^ (i as u64) << 20)))).collect();
         let m = chosen.len();
         let pts: Vec<Vec3> = chosen.iter().map(|&i| useful[i].y.p).collect();
         let dens = set_densities(&pts, c.knn_k.unwrap_or_else(|| rendering_k(c.vpls)), scene.surface_area());
@@ -119,8 +120,8 @@ impl VplSampler for MirResampleSampler {
         &self.set
     }
 
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
-        format!("mir-resample: {} of {} VPLs from {} camera paths ({} bring light); {:.1} ms", s.stored, self.config.vpls, s.paths, s.useful, s.ms)
+        Stats::new().count("stored", s.stored).count("paths", s.paths).count("useful", s.useful).ms("ms", s.ms)
     }
 }

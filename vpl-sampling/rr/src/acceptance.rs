@@ -6,6 +6,7 @@
 /// contribution but never below ε. Φ̃_v = 0 (nothing known of the image yet)
 /// gives p = 1: plain Instant Radiosity.
 #[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
 pub fn acceptance(phi_i: f32, phi_v: f32, epsilon: f32) -> f32 {
     if !(phi_v > 0.0) {
         return 1.0;

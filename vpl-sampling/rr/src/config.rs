@@ -1,5 +1,7 @@
 //! Settings of the Russian-roulette sampler, with the paper's defaults.
 
+use vpl_core::{Budget, ParamError, ParamKey, Params};
+
 /// Settings of [`crate::RrSampler`]. The defaults are the paper's (§4):
 /// ε = 0.05 and N_C = 100 camera samples.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,4 +53,31 @@ pub enum RrError {
     /// A setting is out of range.
     #[error("invalid RR settings: {0}")]
     Invalid(&'static str),
+}
+
+impl RrConfig {
+    /// The keys [`RrConfig::from_params`] reads.
+    pub const KEYS: &'static [ParamKey] = &[
+        ParamKey { key: "rr-epsilon", default: "0.05", about: "ε of eq. (3): the least acceptance probability" },
+        ParamKey { key: "camera-samples", default: "100", about: "N_C: camera samples per frame" },
+        ParamKey { key: "rr-pilot", default: "false", about: "estimate Φ̃_total from a pilot set on the first frame" },
+        ParamKey { key: "rr-max-candidates", default: "64", about: "most candidates per frame, as a multiple of I" },
+    ];
+
+    /// The settings of `budget` (I) with the paper's defaults, changed by
+    /// `p`'s keys ([`RrConfig::KEYS`]).
+    pub fn from_params(budget: &Budget, p: &Params) -> Result<RrConfig, ParamError> {
+        let d = RrConfig::default();
+        let epsilon = p.get_or("rr-epsilon", d.epsilon)?;
+        if !(epsilon > 0.0 && epsilon <= 1.0) {
+            return Err(p.out_of_range("rr-epsilon", epsilon, "in (0, 1]"));
+        }
+        Ok(RrConfig {
+            vpls: budget.vpls,
+            epsilon,
+            camera_samples: p.count_or("camera-samples", d.camera_samples, 1)?,
+            pilot: p.get_or("rr-pilot", d.pilot)?,
+            max_candidates_factor: p.count_or("rr-max-candidates", d.max_candidates_factor, 1)?,
+        })
+    }
 }

@@ -42,13 +42,30 @@
 //! rr.next_frame(&frame(1));
 //! assert!(rr.stats().mean_acceptance < 0.5); // around the corner, most candidates are dropped
 //! ```
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
 mod acceptance;
 mod config;
 mod sampler;
+mod source;
 
 pub use acceptance::acceptance;
 pub use config::{RrConfig, RrError};
 pub use sampler::{PhiSource, RrSampler, RrStats};
+pub use source::{CandidateSource, LightPaths, SamplerCandidates};

@@ -3,11 +3,12 @@
 
 use crate::acceptance::acceptance;
 use crate::config::{RrConfig, RrError};
+use crate::source::{CandidateSource, LightPaths};
 use rayon::prelude::*;
 use std::time::Instant;
 use vpl_core::image::luminance;
 use vpl_core::importons::Importons;
-use vpl_core::{stream, Frame, LightPathGenerator, Purpose, Vpl, VplSampler, VplSet};
+use vpl_core::{Frame, Purpose, Stats, Vpl, VplSampler, VplSet, stream};
 use vpl_ir::{InstantRadiosity, IrConfig};
 
 /// Where the frame's Φ̃_total came from.
@@ -47,10 +48,11 @@ pub struct RrStats {
 }
 
 /// Russian-roulette acceptance of light-path VPLs (Georgiev & Slusallek
-/// 2010) as a [`VplSampler`], around any [`LightPathGenerator`].
+/// 2010) as a [`VplSampler`], around any [`CandidateSource`]: light paths
+/// ([`RrSampler::over_ir`]) or another sampler ([`crate::SamplerCandidates`]).
 pub struct RrSampler {
     config: RrConfig,
-    inner: Box<dyn LightPathGenerator>,
+    inner: Box<dyn CandidateSource>,
     set: VplSet,
     /// Mean pixel luminance Φ̃_total / P the sampler estimated from its own
     /// VPLs in the last frame.
@@ -82,11 +84,11 @@ impl RrSampler {
     pub fn over_ir(config: RrConfig, bounces: u32, fresh_paths: bool) -> Result<RrSampler, RrError> {
         let ir = InstantRadiosity::new(IrConfig { vpls: config.vpls, bounces, fresh_paths, ..IrConfig::default() })
             .map_err(|_| RrError::Invalid("the light-path generator rejected the budget or bounce count"))?;
-        RrSampler::new(config, Box::new(ir))
+        RrSampler::new(config, Box::new(LightPaths(ir)))
     }
 
     /// Acceptance around `inner`.
-    pub fn new(config: RrConfig, inner: Box<dyn LightPathGenerator>) -> Result<RrSampler, RrError> {
+    pub fn new(config: RrConfig, inner: Box<dyn CandidateSource>) -> Result<RrSampler, RrError> {
         config.validate()?;
         Ok(RrSampler { config, inner, set: VplSet::new(config.vpls), carried: None, rate: None, stats: RrStats::default() })
     }
@@ -153,7 +155,7 @@ impl VplSampler for RrSampler {
             (None, None) if c.pilot => {
                 // Plain light-path VPLs (p = 1) against the camera samples:
                 // Σ_i Φ̃_i estimates the image mean (§3.3, single image).
-                let pilot = self.inner.generate(scene, budget_i, frame.seed ^ 0x9170_7000, frame.index);
+                let pilot = self.inner.candidates(frame, budget_i, frame.seed ^ 0x9170_7000);
                 let judged = self.judge(frame, &imp, &pilot, 0.0, 0x9170_7000);
                 let mean = judged.iter().map(|j| j.share).sum::<f64>() as f32;
                 // The pilot's Φ̃_i (p = 1: uncapped) also give the acceptance
@@ -173,10 +175,11 @@ impl VplSampler for RrSampler {
         let rate = if phi_v > 0.0 { self.rate.unwrap_or(1.0) } else { 1.0 };
         let most = budget_i * c.max_candidates_factor;
         let budget_c = ((budget_i as f64 / rate.max(1e-9)).ceil() as usize).clamp(budget_i, most);
-        let cands = self.inner.generate(scene, budget_c, frame.seed, frame.index);
+        let cands = self.inner.candidates(frame, budget_c, frame.seed);
         let judged = self.judge(frame, &imp, &cands, phi_v, 0);
 
-        let mean_acceptance = if judged.is_empty() { 1.0 } else { (judged.iter().map(|j| j.p as f64).sum::<f64>() / judged.len() as f64) as f32 };
+        let mean_acceptance =
+            if judged.is_empty() { 1.0 } else { (judged.iter().map(|j| j.p as f64).sum::<f64>() / judged.len() as f64) as f32 };
         let mut kept: Vec<Vpl> = judged.iter().filter_map(|j| j.kept).collect();
         let accepted = kept.len();
         self.carried = Some(judged.iter().map(|j| j.share).sum::<f64>() as f32).filter(|m| m.is_finite() && *m > 0.0);
@@ -214,15 +217,15 @@ impl VplSampler for RrSampler {
         &self.set
     }
 
-    fn acceptance(&self) -> Option<f32> {
-        Some(self.stats.mean_acceptance)
-    }
-
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
-        format!(
-            "rr over {}: {} of {} VPLs stored; {} candidates from a budget of {}, {} accepted, mean acceptance {:.3}; Phi_v {:.3e} ({:?}); {:.1} ms",
-            self.inner.name(), s.stored, self.config.vpls, s.candidates, s.budget, s.accepted, s.mean_acceptance, s.phi_v, s.source, s.ms
-        )
+        Stats::new()
+            .count("stored", s.stored)
+            .count("budget", s.budget)
+            .count("candidates", s.candidates)
+            .count("accepted", s.accepted)
+            .value("acceptance", s.mean_acceptance as f64)
+            .value("phi_v", s.phi_v as f64)
+            .ms("ms", s.ms)
     }
 }

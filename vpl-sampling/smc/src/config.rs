@@ -1,5 +1,6 @@
 //! Settings of the SMC sampler, with the paper's defaults.
 
+use vpl_core::{Budget, ParamError, ParamKey, Params};
 use vpl_density::rendering_k;
 
 /// Settings of [`crate::SmcSampler`]. The defaults are the paper's (§3.2, §4):
@@ -89,4 +90,51 @@ pub enum SmcError {
     /// A setting is out of range.
     #[error("invalid SMC settings: {0}")]
     Invalid(&'static str),
+}
+
+impl SmcConfig {
+    /// The keys [`SmcConfig::from_params`] reads.
+    pub const KEYS: &'static [ParamKey] = &[
+        ParamKey { key: "m-max", default: "16", about: "M_max: VPLs allowed to move per frame (Alg. 1, line 13)" },
+        ParamKey { key: "resample-ratio", default: "16", about: "candidate-ray hits per candidate (16·I hits resampled to I)" },
+        ParamKey { key: "radiosity-paths", default: "16", about: "path-traced NEE paths per radiosity estimate" },
+        ParamKey { key: "knn-k", default: "max(1, ⌊√(I/32)⌋)", about: "k of the rendered VPLs' densities (eq. 8)" },
+        ParamKey { key: "warmup", default: "100", about: "iterations before the first frame" },
+        ParamKey { key: "max-retries", default: "8", about: "retries of a resampling draw that lands on a taken hit" },
+        ParamKey { key: "visibility-rays", default: "16", about: "V: rays toward a VPL whose mailbox point was lost" },
+        ParamKey { key: "visibility-iterations", default: "2", about: "rounds of those rays per frame" },
+        ParamKey {
+            key: "strong-quantile",
+            default: "0.95",
+            about: "quantile of the VPL intensities above which a candidate is strong (eq. 9)",
+        },
+    ];
+
+    /// The settings of `budget` (I and the radiosity paths' bounces,
+    /// `max_depth − 3`) with the paper's defaults, changed by `p`'s keys
+    /// ([`SmcConfig::KEYS`]).
+    pub fn from_params(budget: &Budget, p: &Params) -> Result<SmcConfig, ParamError> {
+        let d = SmcConfig::default();
+        let strong_quantile = p.get_or("strong-quantile", d.strong_quantile)?;
+        if !(strong_quantile > 0.0 && strong_quantile <= 1.0) {
+            return Err(p.out_of_range("strong-quantile", strong_quantile, "in (0, 1]"));
+        }
+        let knn_k = p.get::<usize>("knn-k")?;
+        if knn_k == Some(0) {
+            return Err(p.out_of_range("knn-k", 0, "at least 1"));
+        }
+        Ok(SmcConfig {
+            vpls: budget.vpls,
+            m_max: p.get_or("m-max", d.m_max)?,
+            resample_ratio: p.count_or("resample-ratio", d.resample_ratio, 1)?,
+            max_retries: p.get_or("max-retries", d.max_retries)?,
+            radiosity_paths: p.count_or("radiosity-paths", d.radiosity_paths, 1)?,
+            radiosity_bounces: budget.radiosity_bounces(),
+            knn_k,
+            warmup: p.get_or("warmup", d.warmup)?,
+            visibility_rays: p.get_or("visibility-rays", d.visibility_rays)?,
+            visibility_iterations: p.get_or("visibility-iterations", d.visibility_iterations)?,
+            strong_quantile,
+        })
+    }
 }

@@ -6,7 +6,10 @@
 //! evolved from frame to frame by replacing at most M_max of them, so the
 //! image is stable in time.
 //!
-//! Every line of Algorithm 1 is here ([`SmcSampler::iterate`]):
+//! Every line of Algorithm 1 is here ([`SmcSampler::iterate`]), each step a
+//! method named after it: `draw_camera_points`, `verify_indirect_visibility`,
+//! `draw_candidates`, `choose_removals`, `fill_slots`, `refresh_radiosities`,
+//! `refresh_densities`, `write_fluxes`:
 //!
 //! 1. camera points X, cast through random raster positions;
 //! 2. indirect visibility by mailboxing (§3.2.2): a VPL stays valid while the
@@ -51,6 +54,21 @@
 //! let moved = smc.next_frame(&frame(1)).moved_count();
 //! assert!(moved <= 16, "{moved} VPLs moved");
 //! ```
+//!
+//! ## Build profile
+//!
+//! Debug builds of the toolkit's crates are 20–50× slower than optimised ones
+//! (an SMC frame takes 9.7 s instead of 0.18 s). The toolkit's own workspace
+//! optimises its dependencies, but a workspace's profile does not reach the
+//! projects that depend on it. Add to your project's `Cargo.toml`:
+//!
+//! ```toml
+//! [profile.dev.package."*"]
+//! opt-level = 3
+//! ```
+//!
+//! Your own crates stay quick to compile; every dependency, this one included,
+//! is optimised.
 
 #![warn(missing_docs)]
 
@@ -59,6 +77,6 @@ mod points;
 mod sampler;
 
 pub use config::{SmcConfig, SmcError};
-pub use points::{camera_points, camera_sees, candidate_hits, mutual_ray, mutually_visible, resolve, CameraPoint, CandidateHit};
-pub use vpl_core::resample::resample;
+pub use points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, mutually_visible, resolve};
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};
+pub use vpl_core::resample::resample;

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{stream, Camera, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint};
+use vpl_core::{Camera, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint, stream};
 
 /// A camera-visible point that can reflect VPL light toward the camera,
 /// normals turned toward the camera.

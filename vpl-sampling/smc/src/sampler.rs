@@ -1,17 +1,19 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::points::{camera_points, camera_sees, candidate_hits, mutual_ray, resolve, CameraPoint, CandidateHit};
-use vpl_core::resample::resample;
+use crate::points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, resolve};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
+use vpl_core::resample::resample;
 use vpl_core::rng::mix64;
 use vpl_core::scene::LightingKey;
-use std::sync::Arc;
-use vpl_core::{stream, Camera, CpuRays, Frame, Purpose, RadiosityEstimator, RayCaster, Scene, SurfacePoint, Vpl, VplSampler, VplSet};
-use vpl_density::{set_densities, KnnDensity};
+use vpl_core::{
+    Camera, CpuRays, Frame, Purpose, RadiosityEstimator, RayCaster, Scene, Services, Stats, SurfacePoint, Vpl, VplSampler, VplSet, stream,
+};
+use vpl_density::{KnnDensity, set_densities};
 use vpl_pathtrace::PathRadiosity;
 
 /// A radiosity estimator the sampler can share between threads.
@@ -144,6 +146,19 @@ impl SmcSampler {
         SmcSampler::with_estimator(config, Box::new(pt))
     }
 
+    /// A sampler that casts its rays (camera points, candidate rays,
+    /// mailbox and indirect-visibility rays) with `services.rays` and
+    /// estimates radiosities with `services.radiosity` (its own path tracer
+    /// when that is `None`): what a backend (a GPU) hands over.
+    pub fn with_services(config: SmcConfig, services: &Services) -> Result<SmcSampler, SmcError> {
+        let mut s = match &services.radiosity {
+            Some(make) => SmcSampler::with_estimator(config, make.estimator(config.radiosity_paths, config.radiosity_bounces))?,
+            None => SmcSampler::new(config)?,
+        };
+        s.rays = services.rays.clone();
+        Ok(s)
+    }
+
     /// A sampler with another radiosity estimator.
     pub fn with_estimator(config: SmcConfig, estimator: Estimator) -> Result<SmcSampler, SmcError> {
         config.validate()?;
@@ -222,25 +237,55 @@ impl SmcSampler {
         mix64(seed ^ mix64(id.wrapping_add(0x5EC0_0002)).rotate_left(17))
     }
 
-    /// One iteration of Algorithm 1 (lines 3–19) for `camera` over `scene`.
-    /// The first call initialises Y from candidates (line 1).
+    /// One iteration of Algorithm 1 (lines 3–19) for `camera` over `scene`,
+    /// step by step; the first call initialises Y from candidates (line 1).
     pub fn iterate(&mut self, scene: &Scene, camera: &Camera, seed: u64) -> &VplSet {
         let start = Instant::now();
-        let c = self.config;
-        let it = self.iterations;
-        let mut st = SmcStats { iterations: it + 1, ..SmcStats::default() };
+        let mut st = SmcStats { iterations: self.iterations + 1, ..SmcStats::default() };
         let mut tm = SmcTimings::default();
-
-        // Line 3: camera points X.
+        let xs = self.draw_camera_points(scene, camera, seed, &mut st, &mut tm);
+        let valid = self.verify_indirect_visibility(scene, camera, &xs, seed, &mut st, &mut tm);
+        let candidates = self.draw_candidates(scene, &xs, seed, &mut st, &mut tm);
         let t0 = Instant::now();
-        let n_rays = c.vpls * c.resample_ratio;
-        let rays = self.rays.as_ref();
-        let xs = camera_points(scene, camera, rays, n_rays, seed, it);
+        self.choose_removals(&candidates, &valid, &mut st);
+        let added = self.fill_slots(candidates, &xs, &mut st);
+        tm.candidates_ms += ms(t0);
+        self.refresh_radiosities(scene, seed, &added, &mut st, &mut tm);
+        let n = self.refresh_densities(scene, &mut tm);
+        self.write_fluxes(n, &mut st);
+        self.iterations += 1;
+        tm.total_ms = ms(start);
+        self.stats = st;
+        self.timings = tm;
+        &self.set
+    }
+
+    /// Line 3: camera points X, from random raster positions.
+    fn draw_camera_points(&self, scene: &Scene, camera: &Camera, seed: u64, st: &mut SmcStats, tm: &mut SmcTimings) -> Vec<CameraPoint> {
+        let t0 = Instant::now();
+        let n_rays = self.config.vpls * self.config.resample_ratio;
+        let xs = camera_points(scene, camera, self.rays.as_ref(), n_rays, seed, self.iterations);
         st.camera_points = xs.len();
         tm.candidates_ms += ms(t0);
+        xs
+    }
 
-        // Line 4: INVALID ← Y \ indirectly visible VPLs (mailboxing, then V rays).
+    /// Line 4: INVALID ← Y \ indirectly visible VPLs. A VPL whose mailbox
+    /// point the camera still sees stays valid (§3.2.2); for the others, up
+    /// to V rays from random camera points try to see it, in rounds, and the
+    /// first that does becomes its mailbox. Returns which slots are valid.
+    fn verify_indirect_visibility(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        xs: &[CameraPoint],
+        seed: u64,
+        st: &mut SmcStats,
+        tm: &mut SmcTimings,
+    ) -> Vec<bool> {
         let t0 = Instant::now();
+        let (c, it) = (self.config, self.iterations);
+        let rays = self.rays.as_ref();
         let anchors: Vec<Option<CameraPoint>> = self.particles.iter().map(|p| p.map(|p| p.anchor)).collect();
         let mut valid: Vec<bool> = camera_sees(scene, camera, rays, &anchors);
         st.mailbox_valid = valid.iter().filter(|v| **v).count();
@@ -252,10 +297,11 @@ impl SmcSampler {
                 }
                 // Up to visibility_rays camera points per unverified VPL, all
                 // drawn first; the first that sees the VPL becomes its mailbox.
+                let particles = &self.particles;
                 let tries: Vec<(usize, CameraPoint, Result<vpl_core::Ray, bool>)> = unverified
                     .par_iter()
                     .flat_map_iter(|&s| {
-                        let p = self.particles[s].expect("unverified slots hold a VPL");
+                        let p = particles[s].expect("unverified slots hold a VPL");
                         let mut rng = stream(seed, it, Purpose::INDIRECT_VISIBILITY, (s as u64) << 8 | round as u64);
                         let draws: Vec<CameraPoint> = (0..c.visibility_rays).map(|_| xs[rng.below(xs.len() as u32) as usize]).collect();
                         draws.into_iter().map(move |x| (s, x, mutual_ray(scene, &x, p.y.p, p.y.n)))
@@ -277,15 +323,22 @@ impl SmcSampler {
         let occupied = self.particles.iter().filter(|p| p.is_some()).count();
         st.invalid = occupied - st.mailbox_valid - st.ray_valid;
         tm.visibility_ms = ms(t0);
+        valid
+    }
 
+    /// Lines 5–8: candidates Ŷ. Rays from X hit the scene (line 5); the hits
+    /// are resampled toward a uniform density over area (line 6); each
+    /// candidate gets its radiosity, seeded by the id it keeps as a VPL
+    /// (line 7), and its density against Y with k = 1 (line 8, §3.2.4).
+    fn draw_candidates(&mut self, scene: &Scene, xs: &[CameraPoint], seed: u64, st: &mut SmcStats, tm: &mut SmcTimings) -> Vec<Candidate> {
+        let (c, it) = (self.config, self.iterations);
         // Line 5: hits of rays from X.
         let t0 = Instant::now();
-        let hits = candidate_hits(scene, rays, &xs, seed, it);
+        let hits = candidate_hits(scene, self.rays.as_ref(), xs, seed, it);
         st.hits = hits.len();
         tm.candidates_ms += ms(t0);
 
-        // Line 6: resample the hits toward a uniform density over area:
-        // weight 1/p_hit(y) ∝ r_1(y)², the squared distance to the nearest other hit.
+        // Line 6: weight 1/p_hit(y) ∝ r_1(y)², the squared distance to the nearest other hit.
         let t0 = Instant::now();
         let hit_points: Vec<Vec3> = hits.iter().map(|h| h.y.p).collect();
         let weights = match KnnDensity::new(&hit_points) {
@@ -302,11 +355,12 @@ impl SmcSampler {
         let t0 = Instant::now();
         let first_id = self.next_id;
         self.next_id += chosen.len() as u64;
-        let jobs: Vec<(SurfacePoint, u64)> = chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::radiosity_seed(seed, first_id + i as u64))).collect();
+        let jobs: Vec<(SurfacePoint, u64)> =
+            chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::radiosity_seed(seed, first_id + i as u64))).collect();
         let radiances: Vec<Vec3> = self.estimator.radiosity_many(scene, &jobs);
         tm.radiosity_ms += ms(t0);
 
-        // Line 8: candidate densities against Y with k = 1 (§3.2.4).
+        // Line 8: candidate densities against Y with k = 1.
         let t0 = Instant::now();
         let current: Vec<Vec3> = self.particles.iter().flatten().map(|p| p.y.p).collect();
         let cand_points: Vec<Vec3> = chosen.iter().map(|&h| hits[h].y.p).collect();
@@ -316,22 +370,31 @@ impl SmcSampler {
             _ => vec![1.0; chosen.len()],
         };
         tm.knn_ms += ms(t0);
-        let t0 = Instant::now();
-        let mut cands: Vec<Candidate> = chosen
+        chosen
             .iter()
             .enumerate()
-            .map(|(i, &h)| Candidate { hit: hits[h], id: first_id + i as u64, radiance: radiances[i], intensity: intensity(radiances[i], cand_density[i]) })
-            .collect();
+            .map(|(i, &h)| Candidate {
+                hit: hits[h],
+                id: first_id + i as u64,
+                radiance: radiances[i],
+                intensity: intensity(radiances[i], cand_density[i]),
+            })
+            .collect()
+    }
 
-        // Line 9, eq. (9): M_strong counts candidates stronger than the
-        // strong_quantile of the current intensities; M_min = min(M_max, M_strong).
+    /// Lines 9–13: which VPLs leave. M_strong counts the candidates stronger
+    /// than the strong_quantile of the current intensities and M_min =
+    /// min(M_max, M_strong) (eq. 9); while |INVALID| < M_min the weakest
+    /// valid VPL is invalidated (lines 10–12); at most M_max of INVALID are
+    /// removed, weakest first (line 13).
+    fn choose_removals(&mut self, candidates: &[Candidate], valid: &[bool], st: &mut SmcStats) {
+        let c = self.config;
         let mut current_i: Vec<f32> = self.particles.iter().flatten().map(|p| p.intensity()).collect();
         current_i.sort_by(f32::total_cmp);
         let threshold = quantile(&current_i, c.strong_quantile);
-        st.m_strong = cands.iter().filter(|k| threshold.is_none_or(|t| k.intensity > t)).count();
+        st.m_strong = candidates.iter().filter(|k| threshold.is_none_or(|t| k.intensity > t)).count();
         let m_min = c.m_max.min(st.m_strong);
 
-        // Lines 10–12: while |INVALID| < M_min, invalidate the weakest valid VPL.
         let by_intensity = |a: &usize, b: &usize, ps: &[Option<Particle>]| {
             let (ia, ib) = (ps[*a].map_or(0.0, |p| p.intensity()), ps[*b].map_or(0.0, |p| p.intensity()));
             ia.total_cmp(&ib).then(a.cmp(b))
@@ -345,36 +408,47 @@ impl SmcSampler {
             st.weakest = extra.min(weak.len());
             invalid.extend(weak.into_iter().take(extra));
         }
-        // Line 13: remove at most M_max of them, weakest first.
         invalid.truncate(c.m_max);
         for &s in &invalid {
             self.particles[s] = None;
         }
         st.removed = invalid.len();
+    }
 
-        // Lines 14–17: fill empty slots with the strongest candidates.
-        cands.sort_by(|a, b| b.intensity.total_cmp(&a.intensity).then(a.id.cmp(&b.id)));
-        let mut next = cands.into_iter();
+    /// Lines 14–17: the strongest candidates fill the empty slots; returns
+    /// the slots filled.
+    fn fill_slots(&mut self, mut candidates: Vec<Candidate>, xs: &[CameraPoint], st: &mut SmcStats) -> Vec<usize> {
+        candidates.sort_by(|a, b| b.intensity.total_cmp(&a.intensity).then(a.id.cmp(&b.id)));
+        let mut next = candidates.into_iter();
         let mut added = Vec::new();
-        for s in 0..c.vpls {
+        for s in 0..self.config.vpls {
             if self.particles[s].is_some() {
                 continue;
             }
             let Some(k) = next.next() else { break };
-            self.particles[s] = Some(Particle { y: k.hit.y, id: k.id, radiance: Vec3::ZERO, selection_radiance: k.radiance, density: 0.0, anchor: xs[k.hit.origin as usize] });
+            self.particles[s] = Some(Particle {
+                y: k.hit.y,
+                id: k.id,
+                radiance: Vec3::ZERO,
+                selection_radiance: k.radiance,
+                density: 0.0,
+                anchor: xs[k.hit.origin as usize],
+            });
             added.push(s);
             st.added += 1;
         }
-        tm.candidates_ms += ms(t0);
+        added
+    }
 
-        // Line 18: radiosities of the set, anew only when the lighting changed
-        // (otherwise the same seeds would give the same values); the
-        // rendering radiosity of a VPL that just joined Y ([`Self::render_seed`]).
+    /// Line 18: radiosities of the set, anew only when the lighting changed
+    /// (otherwise the same seeds would give the same values); the rendering
+    /// radiosity of each VPL that just joined Y ([`Self::render_seed`]).
+    fn refresh_radiosities(&mut self, scene: &Scene, seed: u64, added: &[usize], st: &mut SmcStats, tm: &mut SmcTimings) {
         let t0 = Instant::now();
         let key = LightingKey::of(scene);
         if self.lighting.as_ref() != Some(&key) {
             st.relit = self.lighting.is_some();
-            let slots: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some()).collect();
+            let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
             let jobs: Vec<(SurfacePoint, u64)> = slots
                 .iter()
                 .flat_map(|&s| {
@@ -391,35 +465,40 @@ impl SmcSampler {
             }
             self.lighting = Some(key);
         } else {
-            let jobs: Vec<(SurfacePoint, u64)> = added.iter().filter_map(|&s| self.particles[s].map(|p| (p.y, Self::render_seed(seed, p.id)))).collect();
+            let jobs: Vec<(SurfacePoint, u64)> =
+                added.iter().filter_map(|&s| self.particles[s].map(|p| (p.y, Self::render_seed(seed, p.id)))).collect();
             let l = self.estimator.radiosity_many(scene, &jobs);
             let mut fresh = l.into_iter();
-            for &s in &added {
+            for &s in added {
                 if let Some(p) = self.particles[s].as_mut() {
                     p.radiance = fresh.next().expect("one estimate per added VPL");
                 }
             }
         }
         tm.radiosity_ms += ms(t0);
+    }
 
-        // Line 19: densities of the set with the rendering k, each point
-        // excluded from its own neighbours; a set too small for k uses
-        // k = n − 1, and a single VPL the scene's area.
+    /// Line 19: densities of the set with the rendering k (eq. 8), each point
+    /// excluded from its own neighbours; a set too small for k uses k = n − 1,
+    /// and a single VPL the scene's area. Returns the number n of VPLs.
+    fn refresh_densities(&mut self, scene: &Scene, tm: &mut SmcTimings) -> usize {
         let t0 = Instant::now();
-        let slots: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some()).collect();
-        let n = slots.len();
-        let pts: Vec<Vec3> = slots.iter().map(|&s| self.particles[s].unwrap().y.p).collect();
-        let dens = set_densities(&pts, c.k(), scene.surface_area());
+        let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
+        let pts: Vec<Vec3> = slots.iter().filter_map(|&s| self.particles[s].map(|p| p.y.p)).collect();
+        let dens = set_densities(&pts, self.config.k(), scene.surface_area());
         for (&s, &p) in slots.iter().zip(&dens) {
             if let Some(q) = self.particles[s].as_mut() {
                 q.density = p;
             }
         }
         tm.knn_ms += ms(t0);
+        slots.len()
+    }
 
-        // The output: flux = L / (n · p) (eq. 5 and the flux convention of vpl-core).
+    /// The output: flux = L / (n · p) (eq. 5 and the flux convention of vpl-core).
+    fn write_fluxes(&mut self, n: usize, st: &mut SmcStats) {
         self.set.begin_frame();
-        for s in 0..c.vpls {
+        for s in 0..self.config.vpls {
             let v = self.particles[s].map(|p| {
                 let flux = p.radiance / (n as f32 * p.density);
                 Vpl { y: p.y.p, n: p.y.n, flux: if flux.is_finite() { flux } else { Vec3::ZERO }, id: p.id, bounce: 0 }
@@ -428,11 +507,6 @@ impl SmcSampler {
         }
         st.stored = n;
         st.intensity_cv = coefficient_of_variation(self.particles.iter().flatten().map(|p| p.intensity()));
-        self.iterations += 1;
-        tm.total_ms = ms(start);
-        self.stats = st;
-        self.timings = tm;
-        &self.set
     }
 }
 
@@ -475,26 +549,28 @@ impl VplSampler for SmcSampler {
         self.iterate(frame.scene, frame.camera, frame.seed)
     }
 
-    /// Camera points, candidate rays, mailbox and indirect-visibility rays
-    /// go through `rays` (the CPU BVH by default).
-    fn set_ray_caster(&mut self, rays: Arc<dyn RayCaster>) {
-        self.rays = rays;
-    }
-
-    /// The estimator of every radiosity from now on: `make(radiosity_paths,
-    /// radiosity_bounces)`.
-    fn set_radiosity_estimator(&mut self, make: &dyn Fn(u32, u32) -> Estimator) {
-        self.estimator = make(self.config.radiosity_paths, self.config.radiosity_bounces);
-    }
-
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
         let t = self.timings;
-        format!(
-            "smc: {} of {} VPLs after {} iterations; {} hits -> {} candidates; {} verified by mailbox, {} by rays, {} unverified; M_strong {}, {} removed ({} weakest), {} added; intensity CV {:.3}; {:.1} ms (candidates {:.1}, resampling {:.1}, visibility {:.1}, radiosity {:.1}, kNN {:.1})",
-            s.stored, self.config.vpls, s.iterations, s.hits, s.candidates, s.mailbox_valid, s.ray_valid, s.invalid, s.m_strong, s.removed, s.weakest, s.added,
-            s.intensity_cv, t.total_ms, t.candidates_ms, t.resampling_ms, t.visibility_ms, t.radiosity_ms, t.knn_ms
-        )
+        Stats::new()
+            .count("stored", s.stored)
+            .count("iterations", s.iterations as usize)
+            .count("hits", s.hits)
+            .count("candidates", s.candidates)
+            .count("mailbox_valid", s.mailbox_valid)
+            .count("ray_valid", s.ray_valid)
+            .count("invalid", s.invalid)
+            .count("m_strong", s.m_strong)
+            .count("removed", s.removed)
+            .count("weakest", s.weakest)
+            .count("added", s.added)
+            .value("intensity_cv", s.intensity_cv as f64)
+            .ms("ms", t.total_ms)
+            .ms("candidates_ms", t.candidates_ms)
+            .ms("resampling_ms", t.resampling_ms)
+            .ms("visibility_ms", t.visibility_ms)
+            .ms("radiosity_ms", t.radiosity_ms)
+            .ms("knn_ms", t.knn_ms)
     }
 }
 

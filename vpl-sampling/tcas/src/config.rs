@@ -1,5 +1,7 @@
 //! Settings of TCAS.
 
+use vpl_core::{Budget, ParamError, ParamKey, Params};
+
 /// Settings of [`crate::TcasSampler`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TcasConfig {
@@ -41,4 +43,31 @@ pub enum TcasError {
     /// A setting is out of range.
     #[error("invalid TCAS settings: {0}")]
     Invalid(&'static str),
+}
+
+impl TcasConfig {
+    /// The keys [`TcasConfig::from_params`] reads.
+    pub const KEYS: &'static [ParamKey] = &[
+        ParamKey { key: "mh-iterations", default: "16", about: "Metropolis-Hastings iterations per chain and frame" },
+        ParamKey { key: "rsm-res", default: "64", about: "texels per side of each light's reflective shadow map" },
+        ParamKey { key: "tcas-warmup", default: "48", about: "further iterations on the first frame" },
+        ParamKey { key: "camera-samples", default: "256", about: "camera samples of the view importance" },
+    ];
+
+    /// The settings of `budget` (I; one bounce whatever the depth) with the
+    /// defaults, changed by `p`'s keys ([`TcasConfig::KEYS`]).
+    pub fn from_params(budget: &Budget, p: &Params) -> Result<TcasConfig, ParamError> {
+        let d = TcasConfig::default();
+        let rsm_res = p.get_or("rsm-res", d.rsm_res)?;
+        if !(1..=4096).contains(&rsm_res) {
+            return Err(p.out_of_range("rsm-res", rsm_res, "in 1..=4096"));
+        }
+        Ok(TcasConfig {
+            vpls: budget.vpls,
+            rsm_res,
+            iterations: p.count_or("mh-iterations", d.iterations, 1)?,
+            warmup: p.get_or("tcas-warmup", d.warmup)?,
+            camera_samples: p.count_or("camera-samples", d.camera_samples, 1)?,
+        })
+    }
 }

@@ -4,8 +4,8 @@
 
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
-use vpl_core::glam::Vec3;
 use vpl_core::Scene;
+use vpl_core::glam::Vec3;
 
 /// One texel: a candidate first-bounce VPL.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,7 +76,8 @@ mod tests {
     #[test]
     fn texel_flux_sums_to_the_first_bounce_light() {
         let scene = SceneSetup::load("cornell").unwrap().scene;
-        let total: Vec3 = (0..scene.lights.len()).map(|l| Rsm::render(&scene, l, 64).texels.iter().flatten().map(|t| t.power).sum::<Vec3>()).sum();
+        let total: Vec3 =
+            (0..scene.lights.len()).map(|l| Rsm::render(&scene, l, 64).texels.iter().flatten().map(|t| t.power).sum::<Vec3>()).sum();
         let mut ir = Vec3::ZERO;
         for seed in 0..16 {
             let g = vpl_ir_free_first_bounce(&scene, seed);

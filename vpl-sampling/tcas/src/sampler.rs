@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 use vpl_core::importons::Importons;
 use vpl_core::scene::LightingKey;
-use vpl_core::{stream, Frame, Halton, Purpose, Scene, Vpl, VplSampler, VplSet};
+use vpl_core::{Frame, Halton, Purpose, Scene, Stats, Vpl, VplSampler, VplSet, stream};
 
 /// Counts of the last frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -148,7 +148,13 @@ impl VplSampler for TcasSampler {
         // The importance bounds G at 5 % of the scene's radius: a texel beside
         // one camera sample would otherwise hold its chain for many frames.
         importons.min_distance_sq = (0.05 * scene.radius()).powi(2);
-        let domain = Domain { scene, rsms: &self.rsms, importons: &importons, texels_per_map: c.rsm_res * c.rsm_res, halton: Halton::new(3, frame.seed) };
+        let domain = Domain {
+            scene,
+            rsms: &self.rsms,
+            importons: &importons,
+            texels_per_map: c.rsm_res * c.rsm_res,
+            halton: Halton::new(3, frame.seed),
+        };
         let iters = c.iterations + if self.frames == 0 { c.warmup } else { 0 };
         let (seed, index, drawn, budget) = (frame.seed, frame.index, self.drawn, c.vpls as u64);
         let empty = self.rsms.is_empty();
@@ -211,19 +217,14 @@ impl VplSampler for TcasSampler {
         &self.set
     }
 
-    fn report(&self) -> String {
+    fn stats(&self) -> Stats {
         let s = self.stats;
-        format!(
-            "tcas: {} of {} VPLs; {} of {} proposals accepted; F {:.3e}; RSMs {} ({}x{} per light); {:.1} ms",
-            s.stored,
-            self.config.vpls,
-            s.accepted,
-            s.proposals,
-            s.normalisation,
-            if s.rendered_rsms { "rendered" } else { "kept" },
-            self.config.rsm_res,
-            self.config.rsm_res,
-            s.ms
-        )
+        Stats::new()
+            .count("stored", s.stored)
+            .count("proposals", s.proposals as usize)
+            .count("accepted", s.accepted as usize)
+            .value("normalisation", s.normalisation)
+            .count("rsms_rendered", s.rendered_rsms as usize)
+            .ms("ms", s.ms)
     }
 }

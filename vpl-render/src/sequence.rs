@@ -1,35 +1,15 @@
-//! Rendering a range of frames of a scene's sequence with one pipeline,
+//! Rendering a range of frames of a scene's sequence with one renderer,
 //! recording tracked pixels: `vpl sequence`.
 
-use crate::pipeline::Pipeline;
+use crate::error::RenderError;
+use crate::frame::StageTimings;
+use crate::renderer::Renderer;
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::Path;
 use vpl_core::glam::Vec3;
 use vpl_core::image::{luminance, preview_path, write_atomic};
-use vpl_core::{CoreError, Image, SceneSetup};
-use vpl_shading::StageTimings;
-
-/// Errors of [`run_sequence`].
-#[derive(Debug, thiserror::Error)]
-pub enum SequenceError {
-    /// The scene could not be set up for a frame, or a file not written.
-    #[error(transparent)]
-    Core(#[from] CoreError),
-    /// The frame range does not fit the sequence.
-    #[error("frames {start}..{end} does not fit the sequence of {count} frames")]
-    Frames {
-        /// First frame asked for.
-        start: u32,
-        /// One past the last.
-        end: u32,
-        /// Frames in the sequence.
-        count: u32,
-    },
-    /// A tracked pixel lies outside the image.
-    #[error("tracked pixel {0},{1} is outside the {2}x{3} image")]
-    Pixel(u32, u32, u32, u32),
-}
+use vpl_core::{Image, SceneSetup, Stats};
 
 /// One rendered frame of a sequence.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,14 +26,16 @@ pub struct SequenceFrame {
     pub moved: usize,
     /// Shadow maps (or other per-VPL structures) rebuilt.
     pub rebuilt: usize,
+    /// The sampler's statistics of the frame.
+    pub stats: Stats,
 }
 
 /// Checks that `frames` is a non-empty range inside `setup`'s sequence (a
 /// scene without one has frame 0 only).
-pub fn check_frames(setup: &SceneSetup, frames: &Range<u32>) -> Result<(), SequenceError> {
+pub fn check_frames(setup: &SceneSetup, frames: &Range<u32>) -> Result<(), RenderError> {
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     if frames.start >= frames.end || frames.end > count {
-        return Err(SequenceError::Frames { start: frames.start, end: frames.end, count });
+        return Err(RenderError::Frames { start: frames.start, end: frames.end, count });
     }
     Ok(())
 }
@@ -72,19 +54,19 @@ pub fn default_tracked_pixels(w: u32, h: u32) -> Vec<(u32, u32)> {
 }
 
 /// Renders frames `frames` of `setup`'s sequence (the still scene when it
-/// has none: then only frame 0 exists) at `size`, keeping the pipeline's
-/// state from frame to frame. With `out`, writes `frame_NNNN.exr` (and a PNG
-/// preview at `exposure`) per frame, `tracked.csv` and `frames.csv`.
+/// has none: then only frame 0 exists) at `size`, keeping the renderer's
+/// state from frame to frame. With `out`, writes `frame_NNNN.exr` (and a
+/// PNG preview at `exposure`) per frame, `tracked.csv` and `frames.csv`.
 /// `on_frame` sees each frame as it is done.
 pub fn run_sequence(
     setup: &SceneSetup,
     frames: Range<u32>,
     size: Option<(u32, u32)>,
-    pipeline: &mut Pipeline,
+    renderer: &mut Renderer,
     tracked: &[(u32, u32)],
     out: Option<(&Path, f32)>,
     on_frame: &mut dyn FnMut(&SequenceFrame, &Image),
-) -> Result<Vec<SequenceFrame>, SequenceError> {
+) -> Result<Vec<SequenceFrame>, RenderError> {
     check_frames(setup, &frames)?;
     let fps = setup.sequence.as_ref().map_or(30.0, |s| s.fps);
     let mut done = Vec::with_capacity(frames.len());
@@ -95,10 +77,10 @@ pub fn run_sequence(
         }
         let (w, h) = camera.resolution;
         if let Some(&(x, y)) = tracked.iter().find(|(x, y)| *x >= w || *y >= h) {
-            return Err(SequenceError::Pixel(x, y, w, h));
+            return Err(RenderError::Pixel(x, y, w, h));
         }
         let time = f as f32 / fps;
-        let r = pipeline.render(&scene, &camera, f as u64, time);
+        let r = renderer.render(&scene, &camera, f as u64, time)?;
         let frame = SequenceFrame {
             index: f,
             time,
@@ -106,6 +88,7 @@ pub fn run_sequence(
             timings: r.timings,
             moved: r.moved,
             rebuilt: r.visibility.rebuilt,
+            stats: r.sampler_stats.clone(),
         };
         if let Some((dir, exposure)) = out {
             let path = dir.join(format!("frame_{f:04}.exr"));
@@ -133,16 +116,37 @@ pub fn tracked_csv(tracked: &[(u32, u32)], frames: &[SequenceFrame]) -> String {
     s
 }
 
-/// One row per frame: stage milliseconds, moved VPLs and rebuilt maps.
+/// One row per frame: stage milliseconds, moved VPLs and rebuilt maps,
+/// then one column per sampler statistic (the keys of all frames, in the
+/// order first seen; empty where a frame lacks one).
 pub fn frames_csv(frames: &[SequenceFrame]) -> String {
-    let mut s = String::from("frame,time,total_ms,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,direct_ms,moved,rebuilt\n");
+    let mut keys: Vec<&'static str> = Vec::new();
+    for k in frames.iter().flat_map(|f| f.stats.keys()) {
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    let mut s = String::from("frame,time,total_ms,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,direct_ms,moved,rebuilt");
+    for k in &keys {
+        let _ = write!(s, ",sampler_{k}");
+    }
+    s.push('\n');
     for f in frames {
         let t = f.timings;
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{},{:.6},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{}",
             f.index, f.time, t.total_ms, t.gbuffer_ms, t.sampling_ms, t.visibility_ms, t.shading_ms, t.direct_ms, f.moved, f.rebuilt
         );
+        for k in &keys {
+            match f.stats.stat(k) {
+                Some(v) => {
+                    let _ = write!(s, ",{v}");
+                }
+                None => s.push(','),
+            }
+        }
+        s.push('\n');
     }
     s
 }

@@ -39,10 +39,13 @@ pub fn z_critical(alpha: f64) -> f64 {
     inverse_normal_cdf(1.0 - 0.5 * alpha)
 }
 
+#[allow(clippy::excessive_precision)] // Acklam's coefficients as published
 fn inverse_normal_cdf(p: f64) -> f64 {
-    const A: [f64; 6] = [-3.969683028665376e1, 2.209460984245205e2, -2.759285104469687e2, 1.383577518672690e2, -3.066479806614716e1, 2.506628277459239];
+    const A: [f64; 6] =
+        [-3.969683028665376e1, 2.209460984245205e2, -2.759285104469687e2, 1.383577518672690e2, -3.066479806614716e1, 2.506628277459239];
     const B: [f64; 5] = [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
-    const C: [f64; 6] = [-7.784894002430293e-3, -3.223964580411365e-1, -2.400758277161838, -2.549732539343734, 4.374664141464968, 2.938163982698783];
+    const C: [f64; 6] =
+        [-7.784894002430293e-3, -3.223964580411365e-1, -2.400758277161838, -2.549732539343734, 4.374664141464968, 2.938163982698783];
     const D: [f64; 4] = [7.784695709041462e-3, 3.224671290700398e-1, 2.445134137142996, 3.754408661907416];
     let pl = 0.02425;
     if p < pl {
@@ -51,7 +54,8 @@ fn inverse_normal_cdf(p: f64) -> f64 {
     } else if p <= 1.0 - pl {
         let q = p - 0.5;
         let r = q * q;
-        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
     } else {
         -inverse_normal_cdf(1.0 - p)
     }
@@ -98,7 +102,13 @@ pub fn compare(a: &Image, a_se: &Image, b: &Image, b_se: &Image, alpha: f64) -> 
             let se2 = (sx[c] as f64).powi(2) + (sy[c] as f64).powi(2);
             var_sum[c] += se2;
             let se2 = se2 + (REFERENCE_PRECISION * y[c] as f64).powi(2);
-            let z = if se2 > 0.0 { d.abs() / se2.sqrt() } else if d == 0.0 { 0.0 } else { f64::INFINITY };
+            let z = if se2 > 0.0 {
+                d.abs() / se2.sqrt()
+            } else if d == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            };
             ok &= z <= zc;
             zmax = zmax.max(z as f32);
             rel += d * d / ((y[c] as f64).powi(2) + 1e-2);
@@ -115,7 +125,17 @@ pub fn compare(a: &Image, a_se: &Image, b: &Image, b_se: &Image, alpha: f64) -> 
         mean_se[c] = var_sum[c].sqrt() / n as f64;
         mean_z[c] = (mean_a[c] - mean_b[c]) / mean_se[c].max(f64::MIN_POSITIVE);
     }
-    Ok(Comparison { pixels: n, pass_rate: pass as f64 / n as f64, alpha, mean_a, mean_b, mean_z, mean_se, rel_mse: rel / (3 * n) as f64, z_image })
+    Ok(Comparison {
+        pixels: n,
+        pass_rate: pass as f64 / n as f64,
+        alpha,
+        mean_a,
+        mean_b,
+        mean_z,
+        mean_se,
+        rel_mse: rel / (3 * n) as f64,
+        z_image,
+    })
 }
 
 /// A signed difference image a − b, for writing next to a failed comparison.

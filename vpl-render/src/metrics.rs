@@ -158,7 +158,9 @@ mod tests {
         let mu = Vec3::splat(0.3);
         let sigma = 0.05f32;
         // Uniform noise of standard deviation σ: half-width σ·√3.
-        let b: Vec<Vec3> = (0..n).map(|_| mu + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * (2.0 * sigma * 3f32.sqrt())).collect();
+        let b: Vec<Vec3> = (0..n)
+            .map(|_| mu + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * (2.0 * sigma * 3f32.sqrt()))
+            .collect();
         let a = Image { width: n as u32, height: 1, data: vec![mu; n] };
         let b = Image { width: n as u32, height: 1, data: b };
         let se = Image { width: n as u32, height: 1, data: vec![Vec3::splat(sigma); n] };

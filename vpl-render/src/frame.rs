@@ -1,9 +1,8 @@
 //! One frame of VPL rendering, stage by stage, timed.
 
-use crate::direct::direct_light;
-use crate::gbuffer::render_gbuffer;
 use std::time::Instant;
-use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, VisibilityUpdate, VplSampler, VplVisibility};
+use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, Stats, VisibilityUpdate, VplSampler, VplVisibility};
+use vpl_shading::{direct_light, render_gbuffer};
 
 /// What a frame renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,8 +61,8 @@ pub struct FrameOutput {
     pub moved: usize,
     /// VPLs stored in the frame's set.
     pub stored: usize,
-    /// The sampler's report line ("" when the mode needs no VPLs).
-    pub sampler_report: String,
+    /// The sampler's statistics of the frame (empty when the mode needs no VPLs).
+    pub sampler_stats: Stats,
     /// The indirect light the VPLs gave (`None` when the mode needs no
     /// VPLs): what adaptive samplers read as the previous frame's image.
     pub indirect: Option<Image>,
@@ -112,7 +111,7 @@ pub fn render_frame_on(
     let mut t = StageTimings { gbuffer_ms, ..StageTimings::default() };
     let mut image = Image::new(camera.resolution.0, camera.resolution.1);
     let mut visibility = VisibilityUpdate::default();
-    let mut sampler_report = String::new();
+    let mut sampler_stats = Stats::default();
     let mut moved = 0;
     let mut stored = 0;
     let mut indirect = None;
@@ -130,7 +129,7 @@ pub fn render_frame_on(
         let t0 = Instant::now();
         image = shader.shade(&gbuffer, vpls, vis);
         t.shading_ms = ms(t0);
-        sampler_report = sampler.report();
+        sampler_stats = sampler.stats();
         indirect = Some(image.clone());
     }
     if s.mode.includes(0, s.max_depth) {
@@ -147,5 +146,5 @@ pub fn render_frame_on(
         }
     }
     t.total_ms = ms(start) + gbuffer_ms;
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_report, indirect }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect }
 }

@@ -1,0 +1,71 @@
+//! `vpl bench-gpu`: Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
+//! G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
+
+use super::*;
+
+/// Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
+/// G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
+#[derive(clap::Args)]
+pub(super) struct Args {
+    /// Scenes (comma-separated).
+    #[arg(long = "scene", value_delimiter = ',', default_value = "office,atrium")]
+    scenes: Vec<String>,
+    /// Image size.
+    #[arg(long, default_value = "1920x1080")]
+    size: Size,
+    /// VPL budget.
+    #[arg(long, default_value_t = 2048)]
+    vpls: usize,
+    /// Timed frames per scene (after one warm-up frame); medians are reported.
+    #[arg(long, default_value_t = 5)]
+    frames: u32,
+    /// Worker threads of the CPU sampler (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Also write gpu_bench.md and gpu_bench.json into this folder.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Runs `vpl bench-gpu`.
+pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
+    let Args { scenes, size: Size(w, h), vpls, frames, threads, out } = args;
+    bench_gpu(&scenes, (w, h), vpls, frames, threads, out.as_deref())
+}
+
+/// `vpl bench-gpu`.
+#[cfg(feature = "gpu")]
+fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, threads: Option<usize>, out: Option<&Path>) -> Res<()> {
+    if frames == 0 || vpls == 0 {
+        return Err("--frames and --vpls must be at least 1".into());
+    }
+    for s in scenes {
+        SceneSetup::load(s).map_err(|e| format!("--scene: {e}"))?;
+    }
+    let pool = pool(threads)?;
+    let gpu = vpl_gpu::Gpu::new().map_err(|e| e.to_string())?;
+    let adapter = gpu.ctx().describe();
+    eprintln!("vpl: bench-gpu on {adapter}");
+    let mut rows = Vec::new();
+    for s in scenes {
+        eprintln!("vpl: bench-gpu: {s} ({vpls} VPLs, {}x{}, {frames} frames)", size.0, size.1);
+        let start = crate::table1::rows::row(s).map_or(0, |r| r.quick_frames.start);
+        rows.push(pool.install(|| crate::gpu_bench::bench_scene(&gpu, s, size, vpls, start, frames)).map_err(|e| e.to_string())?);
+    }
+    let md = crate::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
+    println!("{md}");
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        vpl_core::image::write_atomic(&dir.join("gpu_bench.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+        let json = serde_json::json!({ "adapter": adapter, "frames": frames, "threads": pool.current_num_threads(), "rows": rows });
+        let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
+        vpl_core::image::write_atomic(&dir.join("gpu_bench.json"), text.as_bytes()).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// `vpl bench-gpu` without the GPU backend.
+#[cfg(not(feature = "gpu"))]
+fn bench_gpu(_: &[String], _: (u32, u32), _: usize, _: u32, _: Option<usize>, _: Option<&Path>) -> Res<()> {
+    Err("bench-gpu: this build has no GPU backend (build vpl-bench with its default feature `gpu`)".into())
+}

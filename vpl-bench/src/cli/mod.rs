@@ -1,0 +1,589 @@
+//! The `vpl` command line as a library: [`run`] takes a sampler
+//! [`Registry`](vpl_sampling::Registry) and the arguments, so a user's own
+//! binary of a few lines gets every subcommand (`render`, `sequence`,
+//! `table1`, `bench-vpl`, …) with its own samplers registered:
+//!
+//! ```no_run
+//! let mut registry = vpl_sampling::Registry::builtin();
+//! // registry.register(my_sampler_entry()).unwrap();
+//! vpl_bench::cli::main(&registry);
+//! ```
+//!
+//! One module per subcommand (`render`, `sequence`, `table1`, …), each with
+//! its arguments and its `run`; what they share (scene and VPL flags, the
+//! pipeline they describe, thread pools, output checks) is here. Errors are
+//! one line on stderr and exit code 2.
+
+mod args;
+mod bench_gpu;
+mod bench_pt;
+mod bench_vpl;
+mod export_scene;
+mod figures;
+mod georgiev;
+mod merge;
+mod progressive_figures;
+mod render;
+mod sequence;
+mod table1;
+mod table2;
+mod track;
+mod validate_cornell;
+
+pub use args::{ClampArg, FramesArg, PixelArg, Size};
+
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+use vpl_core::image::{preview_path, write_atomic};
+use vpl_core::{Mode, SceneSetup};
+use vpl_pathtrace::{PathTracer, RenderSettings};
+use vpl_sampling::Registry;
+
+#[derive(Parser)]
+#[command(name = "vpl", version, about = "Virtual-point-light global illumination toolkit")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Where the VPL stages run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// The CPU (rayon).
+    Cpu,
+    /// wgpu kernels: G-buffer, shadow maps or shadow rays, shading, filter (sampling stays on the CPU).
+    Gpu,
+}
+
+impl BackendArg {
+    fn backend(self) -> crate::pipeline::BackendKind {
+        match self {
+            BackendArg::Cpu => crate::pipeline::BackendKind::Cpu,
+            BackendArg::Gpu => crate::pipeline::BackendKind::Gpu,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ProfileArg {
+    /// Minutes on a laptop.
+    Quick,
+    /// The paper's settings.
+    Full,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Method {
+    /// Path tracing (the reference).
+    Path,
+    /// Virtual point lights.
+    Vpl,
+    /// The progressive point-light renderer.
+    Progressive,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ModeArg {
+    Full,
+    Direct,
+    Indirect,
+}
+
+/// What to render: scene, frame, path tracer settings, threads.
+#[derive(clap::Args)]
+struct SceneArgs {
+    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file or an .obj file.
+    #[arg(long)]
+    scene: String,
+    /// Frame of the scene's sequence.
+    #[arg(long, default_value_t = 0)]
+    frame: u32,
+    /// Longest path in segments (Mitsuba 3's convention: 5 = direct + 3 indirect bounces).
+    #[arg(long, default_value_t = 5)]
+    max_depth: u32,
+    /// Geometry-term clamp: a value in 1/m², `auto` (G_max = I / scene area, with I from --vpls) or `off`.
+    /// Default: off for --method path, auto for --method vpl and progressive. The path tracer clamps
+    /// the segment leaving the primary hit (§5.4 of the SMC paper), VPL shading the VPL-to-pixel
+    /// segment, the progressive renderer the eye-vertex-to-VPL segment (its bound of G, §8 of
+    /// Dammertz et al.).
+    #[arg(long, allow_hyphen_values = true)]
+    clamp: Option<ClampArg>,
+    /// VPL budget I (--method vpl; also sets the `auto` clamp).
+    #[arg(long, default_value_t = 2048)]
+    vpls: usize,
+    /// Image size WxH (default: the scene camera's).
+    #[arg(long)]
+    size: Option<Size>,
+    /// Seed of all random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum VisibilityArg {
+    /// Exact BVH shadow rays.
+    Raytrace,
+    /// Paraboloid shadow maps.
+    Shadowmap,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ShadingArg {
+    /// 4×4 interleaved VPL subsets and a cross-bilateral filter.
+    Interleaved,
+    /// Every VPL at every pixel.
+    Exhaustive,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum PathSamplingArg {
+    Random,
+    Halton,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BinsArg {
+    /// The closest bin only (the paper's rule; darker where bins crowd).
+    Closest,
+    /// Every bin whose radius reaches the photon.
+    All,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum CullingArg {
+    /// Unseen VPLs kept with probability --cull-accept, their power divided by it (unbiased).
+    Unbiased,
+    /// Unseen VPLs dropped.
+    Deterministic,
+    /// No culling.
+    Off,
+}
+
+/// Settings of `--method progressive` (Dammertz et al. 2010).
+#[derive(clap::Args)]
+struct ProgressiveArgs {
+    /// Passes to render (default 64 when --seconds is not given).
+    #[arg(long)]
+    passes: Option<u64>,
+    /// Time budget in seconds: stop after the pass that reaches it.
+    #[arg(long, allow_hyphen_values = true)]
+    seconds: Option<f64>,
+    /// VPL light paths per pass.
+    #[arg(long, default_value_t = 16)]
+    vpl_paths: usize,
+    /// Caustic photon paths per pass.
+    #[arg(long, default_value_t = 100_000)]
+    caustic_paths: usize,
+    /// Stochastic VPL culling against 256 Halton-chosen eye vertices.
+    #[arg(long, value_enum, default_value_t = CullingArg::Unbiased)]
+    culling: CullingArg,
+    /// Probability of keeping a VPL no representative sees (unbiased culling).
+    #[arg(long, default_value_t = 0.125, allow_hyphen_values = true)]
+    cull_accept: f32,
+    /// Aim caustic photons over the whole emission distribution instead of projection maps.
+    #[arg(long)]
+    no_projection_maps: bool,
+    /// Emit caustic photons from primary VPLs only (no indirect caustics EDS+D+L).
+    #[arg(long)]
+    primary_caustics_only: bool,
+    /// Which caustic bins a photon falls into.
+    #[arg(long, value_enum, default_value_t = BinsArg::Closest)]
+    bins: BinsArg,
+    /// RGB only: no wavelengths at dispersive surfaces.
+    #[arg(long)]
+    no_spectral: bool,
+    /// Path classes to add: all, or a comma-separated list of direct, vpl, caustics, specular.
+    #[arg(long, default_value = "all")]
+    techniques: String,
+    /// Thin-lens radius (scene units; 0 = pinhole).
+    #[arg(long, allow_hyphen_values = true)]
+    lens_radius: Option<f32>,
+    /// Distance of the plane in focus (default: the distance to the camera target).
+    #[arg(long, allow_hyphen_values = true)]
+    focus_distance: Option<f32>,
+    /// Write an EXR snapshot every K passes into --snapshots.
+    #[arg(long)]
+    snapshot_every: Option<u64>,
+    /// Folder for the snapshots (pass_000016.exr, …).
+    #[arg(long)]
+    snapshots: Option<PathBuf>,
+}
+
+/// Settings of `--method vpl`. The sampler flags are keys of the sampler's
+/// parameters (`--m-max 8` is `--set m-max=8`); a flag or key the chosen
+/// sampler does not read is an error.
+#[derive(clap::Args)]
+struct VplArgs {
+    /// VPL sampler: a registry name (ir, rr, mir, mir-resample, tcas, smc, or one registered by the program).
+    #[arg(long, default_value = "ir")]
+    sampler: String,
+    /// A sampler parameter KEY=VALUE (repeat for more): any key the sampler reads.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// How light paths draw their numbers (ir; rr over ir).
+    #[arg(long, value_enum)]
+    path_sampling: Option<PathSamplingArg>,
+    /// New light paths every frame (ir; without it a static scene keeps its VPLs).
+    #[arg(long)]
+    fresh_paths: bool,
+    /// SMC: VPLs allowed to move per frame (M_max; default 16).
+    #[arg(long)]
+    m_max: Option<usize>,
+    /// SMC: candidate-ray hits per candidate (default 16: 16·I hits to I candidates);
+    /// mir-resample: camera paths per VPL (default 256).
+    #[arg(long)]
+    resample_ratio: Option<usize>,
+    /// SMC, mir-resample: path-traced paths per VPL radiosity estimate (default 16).
+    #[arg(long)]
+    radiosity_paths: Option<u32>,
+    /// SMC, mir-resample: k of the VPL densities (default max(1, floor(sqrt(I/32))), eq. 8).
+    #[arg(long)]
+    knn_k: Option<usize>,
+    /// SMC: iterations before the first frame (default 100).
+    #[arg(long)]
+    warmup: Option<u32>,
+    /// RR: epsilon of eq. (3), the least acceptance probability (default 0.05).
+    #[arg(long, allow_hyphen_values = true)]
+    rr_epsilon: Option<f32>,
+    /// RR: estimate the image's indirect luminance from a pilot set on the first
+    /// frame (otherwise the first frame is plain IR, as in the paper).
+    #[arg(long)]
+    rr_pilot: bool,
+    /// RR, MIR, TCAS: camera samples the VPLs' importance is estimated against
+    /// (default 100 for rr and mir, 256 for tcas).
+    #[arg(long)]
+    camera_samples: Option<usize>,
+    /// TCAS: Metropolis-Hastings iterations per chain and frame (default 16);
+    /// MIR: steps between two recorded VPLs of a chain (default 4).
+    #[arg(long)]
+    mh_iterations: Option<u32>,
+    /// MIR: Markov chains run side by side (default 64).
+    #[arg(long)]
+    mir_chains: Option<usize>,
+    /// MIR: probability of a large (independent) step (default 0.3).
+    #[arg(long, allow_hyphen_values = true)]
+    mir_large_step: Option<f32>,
+    /// MIR: defensive share of the target for paths no camera sample sees (default 0.05).
+    #[arg(long, allow_hyphen_values = true)]
+    mir_defensive: Option<f32>,
+    /// TCAS: texels per side of each light's reflective shadow map (default 64).
+    #[arg(long)]
+    rsm_res: Option<u32>,
+    /// TCAS: further iterations on the first frame (default 48).
+    #[arg(long)]
+    tcas_warmup: Option<u32>,
+    /// VPL-to-pixel visibility.
+    #[arg(long, value_enum, default_value_t = VisibilityArg::Shadowmap)]
+    visibility: VisibilityArg,
+    /// Shadow-map side in texels.
+    #[arg(long, default_value_t = vpl_visibility::DEFAULT_RESOLUTION)]
+    shadowmap_res: u32,
+    /// Indirect shading.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Interleaved)]
+    shading: ShadingArg,
+    /// Leave interleaved shading unfiltered.
+    #[arg(long)]
+    no_filter: bool,
+    /// Light samples per pixel for direct light.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    /// Where the G-buffer, visibility and shading run.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Reproduce Georgiev & Slusallek's claims on `corner`: RR's mean acceptance and its
+    /// efficiency gain over IR at equal stored VPLs (and RR's acceptance on cornell, office).
+    Georgiev(georgiev::Args),
+    /// Render one frame of a scene.
+    Render(render::Args),
+    /// Render frames of a scene's sequence with VPLs, the sampler keeping its state from frame to
+    /// frame: one EXR (and PNG preview) per frame, tracked.csv (tracked pixels) and frames.csv (timings).
+    Sequence(sequence::Args),
+    /// Many path-traced samples at a few pixels: ground truth with standard errors, as CSV.
+    Track(track::Args),
+    /// Print a built-in scene (or any scene) as a TOML scene file.
+    ExportScene(export_scene::Args),
+    /// Path-tracing throughput on `cornell` 256×256, max-depth 5, all cores.
+    BenchPt(bench_pt::Args),
+    /// Milliseconds per VPL stage at 640×360 with 2048 IR VPLs on `cornell` and `office`, and the
+    /// SMC sampler's steps (Table 2 of Hedman et al.) on `office` (I VPLs) and `maze` (I/4).
+    BenchVpl(bench_vpl::Args),
+    /// Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
+    /// G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
+    BenchGpu(bench_gpu::Args),
+    /// Table 1 of the SMC paper (|E| and |E′| of eight tracked pixels over five sequences): run the
+    /// units of a shard into --out; without --shard, also merge them into table1.md, .csv, .json and
+    /// the Fig. 7 plots.
+    Table1(table1::Args),
+    /// Table 2 of the SMC paper: milliseconds per stage of an SMC frame on courtyard, office, atrium
+    /// (2048 VPLs) and maze (512); table2.md, .csv, .json.
+    Table2(table2::Args),
+    /// Figs. 8, 9 and 10 of the SMC paper: one frame by path tracing, clamped path tracing and three
+    /// ways of shading the same VPLs; shadow-map resolutions against ray tracing; error against the
+    /// VPL budget. fig8.md, fig10.md with images, CSV, JSON and a plot.
+    Figures(figures::Args),
+    /// Merge the unit files of a sharded Table 1 run (all shards done) into its tables and plots.
+    Merge(merge::Args),
+    /// Figs. 6-8 of the progressive renderer (Dammertz et al. 2010): error against passes on a
+    /// scene, and an equal-time comparison with path tracing on diffuse scenes.
+    ProgressiveFigures(progressive_figures::Args),
+    /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
+    ValidateCornell(validate_cornell::Args),
+}
+
+/// Runs the `vpl` command line on `args` (the program name first, as
+/// [`std::env::args_os`] gives it) with the samplers of `registry`; returns
+/// the exit code: 0, or 2 after one line on stderr for a bad argument, file
+/// or failure.
+pub fn run<I, T>(registry: &Registry, args: I) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand)
+            {
+                let _ = e.print();
+                return if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand { 2 } else { 0 };
+            }
+            let text = e.to_string();
+            let line = text.lines().next().unwrap_or("bad arguments").trim_start_matches("error: ");
+            eprintln!("vpl: error: {line}");
+            return 2;
+        }
+    };
+    match dispatch(cli, registry) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("vpl: error: {e}");
+            2
+        }
+    }
+}
+
+/// [`run`] on the process's arguments; exits with its code.
+pub fn main(registry: &Registry) -> ! {
+    std::process::exit(run(registry, std::env::args_os()))
+}
+
+type Res<T> = Result<T, String>;
+
+fn pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        b = b.num_threads(n);
+    }
+    b.build().map_err(|e| format!("cannot start threads: {e}"))
+}
+
+/// Fails early, before any work, if `path` cannot be written.
+fn check_writable(path: &Path) -> Res<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!("cannot write {}: directory {} does not exist", path.display(), dir.display()));
+    }
+    let md = std::fs::metadata(dir).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    if md.permissions().readonly() {
+        return Err(format!("cannot write {}: directory {} is read-only", path.display(), dir.display()));
+    }
+    if path.is_dir() {
+        return Err(format!("cannot write {}: it is a directory", path.display()));
+    }
+    Ok(())
+}
+
+/// Loads a scene, checks the frame against its sequence, and applies `--size`.
+fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Scene, vpl_core::Camera)> {
+    let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
+    for w in &setup.warnings {
+        eprintln!("vpl: warning: {w}");
+    }
+    if let Some(seq) = &setup.sequence {
+        if frame >= seq.frame_count() {
+            return Err(format!("--frame {frame} is past the end of the sequence ({} frames)", seq.frame_count()));
+        }
+    } else if frame > 0 {
+        return Err(format!("--frame {frame}: the scene has no sequence"));
+    }
+    let (sc, mut camera) = setup.frame(frame).map_err(|e| e.to_string())?;
+    if let Some(Size(w, h)) = size {
+        camera = camera.with_resolution((w, h)).map_err(|e| e.to_string())?;
+    }
+    Ok((sc, camera))
+}
+
+fn mode_of(mode: ModeArg) -> Mode {
+    match mode {
+        ModeArg::Full => Mode::Full,
+        ModeArg::Direct => Mode::Direct,
+        ModeArg::Indirect => Mode::Indirect,
+    }
+}
+
+/// Checks `--max-depth` and `--vpls`.
+fn check_depth(max_depth: u32, vpls: usize) -> Res<()> {
+    if max_depth == 0 {
+        return Err("--max-depth must be at least 1".into());
+    }
+    if vpls == 0 {
+        return Err("--vpls must be at least 1".into());
+    }
+    Ok(())
+}
+
+/// The path tracer that `--max-depth`, `--mode` and `--clamp` describe (off by default).
+fn tracer(max_depth: u32, mode: ModeArg, clamp: Option<ClampArg>, vpls: usize, scene: &vpl_core::Scene) -> PathTracer {
+    let mut pt = PathTracer::new(max_depth, mode_of(mode));
+    pt.clamp = clamp.unwrap_or(ClampArg::Off).resolve(vpls, scene.surface_area());
+    pt
+}
+
+/// Writes `text` atomically to `out`, or to standard output when there is none.
+fn emit(out: Option<&Path>, text: &str) -> Res<()> {
+    match out {
+        Some(p) => write_atomic(p, text.as_bytes()).map_err(|e| e.to_string()),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn dispatch(cli: Cli, registry: &Registry) -> Res<()> {
+    match cli.command {
+        Command::Georgiev(a) => georgiev::run(a, registry),
+        Command::Render(a) => render::run(a, registry),
+        Command::Sequence(a) => sequence::run(a, registry),
+        Command::Track(a) => track::run(a, registry),
+        Command::ExportScene(a) => export_scene::run(a, registry),
+        Command::BenchPt(a) => bench_pt::run(a, registry),
+        Command::BenchVpl(a) => bench_vpl::run(a, registry),
+        Command::BenchGpu(a) => bench_gpu::run(a, registry),
+        Command::Table1(a) => table1::run(a, registry),
+        Command::Table2(a) => table2::run(a, registry),
+        Command::Figures(a) => figures::run(a, registry),
+        Command::Merge(a) => merge::run(a, registry),
+        Command::ProgressiveFigures(a) => progressive_figures::run(a, registry),
+        Command::ValidateCornell(a) => validate_cornell::run(a, registry),
+    }
+}
+
+/// The pipeline that `--method vpl` and its flags describe.
+fn pipeline_spec(
+    v: &VplArgs,
+    vpls: usize,
+    max_depth: u32,
+    mode: ModeArg,
+    clamp: Option<vpl_core::GeometryClamp>,
+    seed: u64,
+) -> Res<crate::pipeline::PipelineSpec> {
+    use crate::pipeline::{PipelineSpec, ShadingSpec, VisibilitySpec};
+    if v.direct_samples == 0 {
+        return Err("--direct-samples must be at least 1".into());
+    }
+    if v.visibility == VisibilityArg::Shadowmap {
+        vpl_visibility::ShadowMaps::new(v.shadowmap_res).map_err(|e| format!("--shadowmap-res: {e}"))?;
+    }
+    Ok(PipelineSpec {
+        sampler: v.sampler.clone(),
+        params: sampler_params(v)?,
+        budget: vpl_core::Budget::new(vpls, max_depth),
+        visibility: match v.visibility {
+            VisibilityArg::Raytrace => VisibilitySpec::RayTraced,
+            VisibilityArg::Shadowmap => VisibilitySpec::ShadowMaps(v.shadowmap_res),
+        },
+        shading: match v.shading {
+            ShadingArg::Exhaustive => ShadingSpec::Exhaustive,
+            ShadingArg::Interleaved => ShadingSpec::Interleaved { filter: !v.no_filter },
+        },
+        clamp,
+        mode: mode_of(mode),
+        direct_samples: v.direct_samples,
+        seed,
+        backend: v.backend.backend(),
+    })
+}
+
+/// The sampler parameters the command line gives: each sampler flag that
+/// was given, under its own name as key, then every `--set KEY=VALUE`.
+fn sampler_params(v: &VplArgs) -> Res<vpl_core::Params> {
+    let mut p = vpl_core::Params::new();
+    let mut put = |key: &str, value: Option<String>| -> Res<()> {
+        if let Some(value) = value {
+            p.insert(key, value).map_err(|e| format!("--{e}"))?;
+        }
+        Ok(())
+    };
+    fn text<T: std::fmt::Display>(x: Option<T>) -> Option<String> {
+        x.map(|x| x.to_string())
+    }
+    put("path-sampling", v.path_sampling.map(|s| if s == PathSamplingArg::Halton { "halton".to_string() } else { "random".to_string() }))?;
+    put("fresh-paths", v.fresh_paths.then(|| "true".to_string()))?;
+    put("m-max", text(v.m_max))?;
+    put("resample-ratio", text(v.resample_ratio))?;
+    put("radiosity-paths", text(v.radiosity_paths))?;
+    put("knn-k", text(v.knn_k))?;
+    put("warmup", text(v.warmup))?;
+    put("rr-epsilon", text(v.rr_epsilon))?;
+    put("rr-pilot", v.rr_pilot.then(|| "true".to_string()))?;
+    put("camera-samples", text(v.camera_samples))?;
+    put("mh-iterations", text(v.mh_iterations))?;
+    put("mir-chains", text(v.mir_chains))?;
+    put("mir-large-step", text(v.mir_large_step))?;
+    put("mir-defensive", text(v.mir_defensive))?;
+    put("rsm-res", text(v.rsm_res))?;
+    put("tcas-warmup", text(v.tcas_warmup))?;
+    for item in &v.set {
+        let (k, value) = item.split_once('=').ok_or_else(|| format!("--set {item}: expected KEY=VALUE"))?;
+        put(k, Some(value.to_string()))?;
+    }
+    Ok(p)
+}
+
+/// A sampler's error in the CLI's words: every key is a flag (`--rr-epsilon`
+/// or `--set rr-epsilon=…`), so the keys are named as flags.
+fn sampling_line(sampler: &str, e: &vpl_sampling::SamplingError) -> String {
+    use vpl_core::ParamError as P;
+    use vpl_sampling::SamplingError as S;
+    let flags = |keys: &[String]| keys.iter().map(|k| format!("--{k}")).collect::<Vec<_>>().join(", ");
+    match e {
+        S::Param { source: P::Invalid { key, value, expected }, .. } => {
+            format!("--sampler {sampler}: --{key} {value}: expected {expected}")
+        }
+        S::Param { source: P::OutOfRange { key, value, allowed }, .. } => {
+            format!("--sampler {sampler}: --{key} {value}: must be {allowed}")
+        }
+        S::Unread { keys, reads, .. } => {
+            let reads = if reads.is_empty() { "none".to_string() } else { flags(reads) };
+            format!("--sampler {sampler} does not read {} (its flags: {reads})", flags(keys))
+        }
+        e => format!("--sampler {sampler}: {e}"),
+    }
+}
+
+/// A renderer for `spec` on frames of `scene`, or one line that names what is wrong.
+fn build_renderer(spec: &crate::pipeline::PipelineSpec, registry: &Registry, scene: &vpl_core::Scene) -> Res<vpl_render::Renderer> {
+    spec.build(registry, scene).map_err(|e| match e {
+        vpl_render::RenderError::Sampling(e) => sampling_line(&spec.sampler, &e),
+        e => crate::pipeline::backend_line(e),
+    })
+}

@@ -1,0 +1,317 @@
+//! `vpl render`: Render one frame of a scene.
+
+use super::*;
+
+/// Render one frame of a scene.
+#[derive(clap::Args)]
+pub(super) struct Args {
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Rendering method.
+    #[arg(long, value_enum, default_value_t = Method::Path)]
+    method: Method,
+    /// Which light paths to include.
+    #[arg(long, value_enum, default_value_t = ModeArg::Full)]
+    mode: ModeArg,
+    /// Samples per pixel (path).
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    #[command(flatten)]
+    v: VplArgs,
+    #[command(flatten)]
+    p: ProgressiveArgs,
+    /// Output EXR; a PNG preview is written beside it.
+    #[arg(long, default_value = "render.exr")]
+    out: PathBuf,
+    /// Also write the per-pixel standard error of the mean to this EXR.
+    #[arg(long)]
+    stderr: Option<PathBuf>,
+    /// Exposure applied to the PNG preview.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// No progress bar or summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Runs `vpl render`.
+pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
+    let Args {
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads },
+        method,
+        mode,
+        spp,
+        v,
+        p,
+        out,
+        stderr,
+        exposure,
+        quiet,
+    } = args;
+    if method == Method::Progressive && mode != ModeArg::Full {
+        return Err("--mode: the progressive renderer renders full images (select path classes with --techniques)".into());
+    }
+    if method != Method::Progressive && spp == 0 {
+        return Err("--spp must be at least 1".into());
+    }
+    check_depth(max_depth, vpls)?;
+    if !(exposure.is_finite() && exposure > 0.0) {
+        return Err("--exposure must be positive".into());
+    }
+    check_writable(&out)?;
+    if let Some(s) = &stderr {
+        check_writable(s)?;
+    }
+    let pool = pool(threads)?;
+    if method == Method::Progressive {
+        return render_progressive(&scene, frame, size, seed, max_depth, clamp, vpls, &p, &out, stderr.as_deref(), exposure, quiet, &pool);
+    }
+    if method == Method::Vpl {
+        if stderr.is_some() {
+            return Err("--stderr is for --method path: one VPL render has no per-pixel error estimate".into());
+        }
+        return render_vpl(registry, &scene, frame, size, seed, max_depth, mode, clamp, vpls, &v, &out, exposure, quiet, &pool);
+    }
+    let (sc, camera) = load_frame(&scene, frame, size)?;
+    let pt = tracer(max_depth, mode, clamp, vpls, &sc);
+    let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let shown = AtomicBool::new(false);
+    let progress = |done: u64, _total: u64| {
+        if !quiet && !shown.load(Ordering::Relaxed) && start.elapsed().as_secs_f32() > 1.0 {
+            shown.store(true, Ordering::Relaxed);
+            bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
+        bar.set_position(done);
+    };
+    let r = pool
+        .install(|| vpl_pathtrace::render(&sc, &camera, &pt, RenderSettings { spp, seed, frame: frame as u64 }, &progress))
+        .map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    r.image.write_exr(&out).map_err(|e| e.to_string())?;
+    r.image.write_png(preview_path(&out), exposure).map_err(|e| e.to_string())?;
+    if let Some(s) = &stderr {
+        r.stderr.write_exr(s).map_err(|e| e.to_string())?;
+    }
+    if !quiet {
+        let m = r.image.mean();
+        eprintln!(
+            "vpl: {} {}x{} {spp} spp in {:.2} s ({:.2} M paths/s), mean RGB {:.5} {:.5} {:.5} -> {}",
+            sc.name,
+            camera.resolution.0,
+            camera.resolution.1,
+            r.seconds,
+            r.paths as f64 / r.seconds / 1e6,
+            m[0],
+            m[1],
+            m[2],
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `vpl render --method vpl`.
+#[allow(clippy::too_many_arguments)]
+fn render_vpl(
+    registry: &Registry,
+    scene: &str,
+    frame: u32,
+    size: Option<Size>,
+    seed: u64,
+    max_depth: u32,
+    mode: ModeArg,
+    clamp: Option<ClampArg>,
+    vpls: usize,
+    v: &VplArgs,
+    out: &Path,
+    exposure: f32,
+    quiet: bool,
+    pool: &rayon::ThreadPool,
+) -> Res<()> {
+    let (sc, camera) = load_frame(scene, frame, size)?;
+    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
+    let mut p = build_renderer(&pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?, registry, &sc)?;
+    p.backend().check_size(camera.resolution).map_err(crate::pipeline::backend_line)?;
+    if let (Some(a), false) = (p.backend().device(), quiet) {
+        eprintln!("vpl: GPU: {a}");
+    }
+    let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0)).map_err(crate::pipeline::backend_line)?;
+    r.image.write_exr(out).map_err(|e| e.to_string())?;
+    r.image.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    if !quiet {
+        let t = r.timings;
+        let m = r.image.mean();
+        if r.indirect.is_some() {
+            eprintln!("vpl: {}: {} of {} VPLs stored; {}", p.sampler().name(), r.stored, vpls, r.sampler_stats);
+            eprintln!(
+                "vpl: visibility {}: {} maps rebuilt, {:.1} MiB; clamp {}",
+                p.visibility().name(),
+                r.visibility.rebuilt,
+                r.visibility.memory_bytes as f64 / (1 << 20) as f64,
+                clamp.map_or("off".to_string(), |c| format!("G_max = {:.3} 1/m^2", c.g_max))
+            );
+        }
+        eprintln!(
+            "vpl: {} {}x{} in {:.1} ms (G-buffer {:.1}, sampling {:.1}, visibility {:.1}, {} shading {:.1}, direct {:.1}), mean RGB {:.5} {:.5} {:.5} -> {}",
+            sc.name,
+            camera.resolution.0,
+            camera.resolution.1,
+            t.total_ms,
+            t.gbuffer_ms,
+            t.sampling_ms,
+            t.visibility_ms,
+            p.shader().name(),
+            t.shading_ms,
+            t.direct_ms,
+            m[0],
+            m[1],
+            m[2],
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `vpl render --method progressive`.
+#[allow(clippy::too_many_arguments)]
+fn render_progressive(
+    scene: &str,
+    frame: u32,
+    size: Option<Size>,
+    seed: u64,
+    max_depth: u32,
+    clamp: Option<ClampArg>,
+    vpls: usize,
+    p: &ProgressiveArgs,
+    out: &Path,
+    stderr: Option<&Path>,
+    exposure: f32,
+    quiet: bool,
+    pool: &rayon::ThreadPool,
+) -> Res<()> {
+    use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
+    if p.passes == Some(0) {
+        return Err("--passes must be at least 1".into());
+    }
+    if let Some(t) = p.seconds {
+        if !(t.is_finite() && t > 0.0) {
+            return Err("--seconds must be positive".into());
+        }
+    }
+    if p.snapshot_every == Some(0) {
+        return Err("--snapshot-every must be at least 1".into());
+    }
+    if p.snapshot_every.is_some() != p.snapshots.is_some() {
+        return Err("--snapshot-every and --snapshots go together".into());
+    }
+    if let Some(d) = &p.snapshots {
+        if d.exists() && !d.is_dir() {
+            return Err(format!("--snapshots {} is not a directory", d.display()));
+        }
+    }
+    if !(p.cull_accept > 0.0 && p.cull_accept <= 1.0) {
+        return Err("--cull-accept must lie in (0, 1] (the acceptance probability of an unseen VPL)".into());
+    }
+    let techniques = Techniques::parse(&p.techniques).map_err(|e| format!("--techniques: {e}"))?;
+    let culling = match p.culling {
+        CullingArg::Unbiased => Culling::Unbiased { accept: p.cull_accept },
+        CullingArg::Deterministic => Culling::Deterministic,
+        CullingArg::Off => Culling::Off,
+    };
+    let (sc, mut camera) = load_frame(scene, frame, size)?;
+    if p.lens_radius.is_some() || p.focus_distance.is_some() {
+        let r = p.lens_radius.unwrap_or(camera.lens_radius);
+        let f = p.focus_distance.unwrap_or((camera.target - camera.origin).length());
+        if !(r.is_finite() && r >= 0.0) {
+            return Err("--lens-radius must be zero or positive".into());
+        }
+        if !(f.is_finite() && f > 0.0) {
+            return Err("--focus-distance must be positive".into());
+        }
+        camera.lens_radius = r;
+        camera.focus_distance = f;
+    }
+    let config = ProgressiveConfig {
+        max_depth,
+        vpl_paths: p.vpl_paths,
+        caustic_paths: p.caustic_paths,
+        culling,
+        clamp: clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area()),
+        projection_maps: !p.no_projection_maps,
+        indirect_caustics: !p.primary_caustics_only,
+        spectral: !p.no_spectral,
+        bins: match p.bins {
+            BinsArg::Closest => vpl_progressive::BinRule::Closest,
+            BinsArg::All => vpl_progressive::BinRule::AllWithin,
+        },
+        techniques,
+        seed,
+        ..ProgressiveConfig::default()
+    };
+    let mut r = Progressive::new(&sc, camera, config).map_err(|e| e.to_string())?;
+    let passes = p.passes.unwrap_or(if p.seconds.is_some() { u64::MAX } else { 64 });
+    if let Some(d) = &p.snapshots {
+        std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+    }
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else if passes == u64::MAX {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::new(passes)
+    };
+    let template = if passes == u64::MAX {
+        "{spinner} {elapsed_precise} pass {pos} ({per_sec}) {msg}"
+    } else {
+        "{elapsed_precise} [{bar:40}] pass {pos}/{len} ({per_sec}) {msg}, eta {eta}"
+    };
+    bar.set_style(ProgressStyle::with_template(template).unwrap().progress_chars("=> "));
+    let start = Instant::now();
+    let mut last = vpl_progressive::PassStats::default();
+    while r.passes() < passes {
+        last = pool.install(|| r.pass());
+        bar.set_message(format!("{} VPLs, {} photons", last.stored, last.photons));
+        bar.inc(1);
+        if let (Some(k), Some(d)) = (p.snapshot_every, &p.snapshots) {
+            if r.passes() % k == 0 {
+                r.image().write_exr(d.join(format!("pass_{:06}.exr", r.passes()))).map_err(|e| e.to_string())?;
+            }
+        }
+        if p.seconds.is_some_and(|t| start.elapsed().as_secs_f64() >= t) {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    let secs = start.elapsed().as_secs_f64();
+    let img = r.image();
+    img.write_exr(out).map_err(|e| e.to_string())?;
+    img.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    if let Some(s) = stderr {
+        r.stderr().write_exr(s).map_err(|e| e.to_string())?;
+    }
+    if !quiet {
+        let m = img.mean();
+        let (w, h) = r.camera().resolution;
+        eprintln!(
+            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} of {} VPLs stored, {} photons of which {} caustic, map coverage {:.1} %, {:.0} ms), mean RGB {:.5} {:.5} {:.5} -> {}",
+            sc.name,
+            r.passes(),
+            r.passes() as f64 / secs,
+            last.stored,
+            last.vpls,
+            last.photons,
+            last.caustic_photons,
+            100.0 * last.map_coverage,
+            last.total_ms,
+            m[0],
+            m[1],
+            m[2],
+            out.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,60 @@
+//! `vpl table2`: Table 2 of the SMC paper: milliseconds per stage of an SMC frame on courtyard, office, atrium
+//! (2048 VPLs) and maze (512); table2.md, .csv, .json.
+
+use super::*;
+
+/// Table 2 of the SMC paper: milliseconds per stage of an SMC frame on courtyard, office, atrium
+/// (2048 VPLs) and maze (512); table2.md, .csv, .json.
+#[derive(clap::Args)]
+pub(super) struct Args {
+    /// Image size.
+    #[arg(long, default_value = "640x360")]
+    size: Size,
+    /// Frames timed per scene (after one warm-up frame).
+    #[arg(long, default_value_t = 10)]
+    frames: u32,
+    /// Where the G-buffer, shadow maps and shading run (sampling stays on the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
+    /// Scenes (comma-separated; default the paper's four: courtyard, office, atrium, maze).
+    #[arg(long = "scene", value_delimiter = ',')]
+    scenes: Vec<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Runs `vpl table2`.
+pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
+    let Args { size: Size(w, h), frames, backend, scenes, threads, out } = args;
+    if frames == 0 {
+        return Err("--frames must be at least 1".into());
+    }
+    let pool = pool(threads)?;
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    if let Some(bad) = scenes.iter().find(|s| !crate::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
+        return Err(format!("--scene: '{bad}' is not a Table 2 scene (courtyard, office, atrium, maze)"));
+    }
+    let mut rows = Vec::new();
+    let mut device = format!("this machine's CPU ({} threads)", pool.current_num_threads());
+    for (paper, scene, _, vpls, _) in crate::table2::PAPER {
+        if !scenes.is_empty() && !scenes.iter().any(|s| s == scene) {
+            continue;
+        }
+        eprintln!("vpl: table2: {scene} ({vpls} VPLs, {w}x{h}, {frames} frames)");
+        let start = crate::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
+        let (row, adapter) = pool
+            .install(|| crate::table2::time_scene(scene, paper, (w, h), vpls, start, frames, backend.backend()))
+            .map_err(|e| e.to_string())?;
+        if let Some(a) = adapter {
+            device = format!("{a} for the G-buffer, shadow maps and shading; sampling on the CPU ({} threads)", pool.current_num_threads());
+        }
+        rows.push(row);
+    }
+    crate::table2::write(&out, &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
+    eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
+    Ok(())
+}

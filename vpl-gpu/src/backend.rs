@@ -1,0 +1,119 @@
+//! The GPU as a [`vpl_render::Backend`]: the G-buffer, shadow maps or
+//! shadow rays, interleaved or exhaustive shading and the filter as wgpu
+//! kernels, and the rays and radiosity estimates of samplers that take them
+//! (SMC). The rest of sampling and the direct light stay on the CPU.
+
+use crate::{Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps};
+use std::sync::Arc;
+use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, SharedEstimator, VplVisibility};
+use vpl_pathtrace::PathRadiosity;
+use vpl_render::{Backend, RenderError, ShadingSpec, VisibilitySpec};
+
+/// The GPU backend on one device.
+#[derive(Clone)]
+pub struct GpuBackend {
+    gpu: Gpu,
+}
+
+impl std::fmt::Debug for GpuBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuBackend").field("adapter", &self.gpu.ctx().describe()).finish()
+    }
+}
+
+/// The GPU backend on the first adapter found (Vulkan, Metal or DX12 first,
+/// GL as the fallback; `WGPU_BACKEND` selects).
+pub fn backend() -> Result<GpuBackend, GpuError> {
+    Ok(GpuBackend::new(Gpu::new()?))
+}
+
+fn err(e: impl std::fmt::Display) -> RenderError {
+    RenderError::backend("gpu", e)
+}
+
+impl GpuBackend {
+    /// The backend on `gpu`.
+    pub fn new(gpu: Gpu) -> GpuBackend {
+        GpuBackend { gpu }
+    }
+
+    /// The device handle.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    fn storage_limit(&self) -> u64 {
+        self.gpu.ctx().device.limits().max_storage_buffer_binding_size as u64
+    }
+}
+
+impl Backend for GpuBackend {
+    fn name(&self) -> &str {
+        "gpu"
+    }
+
+    fn device(&self) -> Option<String> {
+        Some(self.gpu.ctx().describe())
+    }
+
+    fn services(&self) -> Services {
+        let g = self.gpu.clone();
+        let make = move |paths: u32, max_bounces: u32| -> SharedEstimator {
+            Box::new(GpuRadiosity::new(g.clone(), PathRadiosity { paths, max_bounces }))
+        };
+        Services { rays: Arc::new(GpuRays::new(self.gpu.clone())), radiosity: Some(Arc::new(make)) }
+    }
+
+    fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {
+        self.gpu.render_gbuffer(scene, camera).map_err(err)
+    }
+
+    /// Each per-pixel buffer (16 bytes a pixel) must fit the adapter's
+    /// storage-buffer limit.
+    fn check_size(&self, size: (u32, u32)) -> Result<(), RenderError> {
+        let bytes = size.0 as u64 * size.1 as u64 * 16;
+        let limit = self.storage_limit();
+        if bytes > limit {
+            return Err(err(format!(
+                "{}x{} needs {} MiB per image buffer, over the adapter's {} MiB",
+                size.0,
+                size.1,
+                bytes >> 20,
+                limit >> 20
+            )));
+        }
+        Ok(())
+    }
+
+    fn visibility(&self, spec: VisibilitySpec, budget: &Budget) -> Result<Box<dyn VplVisibility>, RenderError> {
+        Ok(match spec {
+            VisibilitySpec::RayTraced => Box::new(GpuRayTraced::new(self.gpu.clone())),
+            VisibilitySpec::ShadowMaps(res) => {
+                let bytes = GpuShadowMaps::atlas_bytes(res, budget.vpls);
+                let limit = self.storage_limit();
+                if bytes > limit {
+                    return Err(err(format!(
+                        "{} shadow maps of {res}² texels need {} MiB, over the adapter's {} MiB per buffer",
+                        budget.vpls,
+                        bytes >> 20,
+                        limit >> 20
+                    )));
+                }
+                Box::new(GpuShadowMaps::new(self.gpu.clone(), res).map_err(|e| RenderError::Invalid(format!("shadow maps: {e}")))?)
+            }
+        })
+    }
+
+    fn shader(&self, spec: ShadingSpec, clamp: Option<GeometryClamp>, seed: u64) -> Result<Box<dyn IndirectShader>, RenderError> {
+        Ok(match spec {
+            ShadingSpec::Exhaustive => Box::new(GpuInterleavedShader::exhaustive(self.gpu.clone(), clamp)),
+            ShadingSpec::Interleaved { filter } => {
+                let mut s = GpuInterleavedShader::new(self.gpu.clone(), clamp, seed);
+                if !filter {
+                    s.cpu.filter = None;
+                }
+                Box::new(s)
+            }
+        })
+    }
+}

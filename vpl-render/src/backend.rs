@@ -1,0 +1,77 @@
+//! Where a renderer's stages run: the G-buffer, visibility, shading and
+//! the services samplers use. [`CpuBackend`] is the CPU (rayon); the crate
+//! `vpl-gpu` implements the same trait on wgpu (`vpl_gpu::backend()`).
+
+use crate::error::RenderError;
+use crate::spec::{ShadingSpec, VisibilitySpec};
+use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, VplVisibility};
+use vpl_shading::{ExhaustiveShader, InterleavedShader};
+use vpl_visibility::{RayTraced, ShadowMaps};
+
+/// A place the stages of a VPL frame run.
+pub trait Backend: Send {
+    /// Short name (`cpu`, `gpu`).
+    fn name(&self) -> &str;
+
+    /// The device in words (the GPU adapter), `None` for the CPU.
+    fn device(&self) -> Option<String> {
+        None
+    }
+
+    /// What samplers built for this backend use: its ray caster and
+    /// radiosity estimators.
+    fn services(&self) -> Services {
+        Services::cpu()
+    }
+
+    /// The G-buffer of `scene` seen by `camera`.
+    fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError>;
+
+    /// Whether images of `size` fit the backend (a GPU's buffer limits).
+    fn check_size(&self, size: (u32, u32)) -> Result<(), RenderError> {
+        let _ = size;
+        Ok(())
+    }
+
+    /// The visibility structure for sets of `budget.vpls` slots.
+    fn visibility(&self, spec: VisibilitySpec, budget: &Budget) -> Result<Box<dyn VplVisibility>, RenderError>;
+
+    /// The indirect shader.
+    fn shader(&self, spec: ShadingSpec, clamp: Option<GeometryClamp>, seed: u64) -> Result<Box<dyn IndirectShader>, RenderError>;
+}
+
+/// The CPU stages of `vpl-shading` and `vpl-visibility`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuBackend;
+
+impl Backend for CpuBackend {
+    fn name(&self) -> &str {
+        "cpu"
+    }
+
+    fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {
+        Ok(vpl_shading::render_gbuffer(scene, camera))
+    }
+
+    fn visibility(&self, spec: VisibilitySpec, _budget: &Budget) -> Result<Box<dyn VplVisibility>, RenderError> {
+        Ok(match spec {
+            VisibilitySpec::RayTraced => Box::new(RayTraced::default()),
+            VisibilitySpec::ShadowMaps(res) => {
+                Box::new(ShadowMaps::new(res).map_err(|e| RenderError::Invalid(format!("shadow maps: {e}")))?)
+            }
+        })
+    }
+
+    fn shader(&self, spec: ShadingSpec, clamp: Option<GeometryClamp>, seed: u64) -> Result<Box<dyn IndirectShader>, RenderError> {
+        Ok(match spec {
+            ShadingSpec::Exhaustive => Box::new(ExhaustiveShader { clamp }),
+            ShadingSpec::Interleaved { filter } => {
+                let mut s = InterleavedShader::new(clamp, seed);
+                if !filter {
+                    s.filter = None;
+                }
+                Box::new(s)
+            }
+        })
+    }
+}

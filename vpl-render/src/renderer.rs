@@ -1,0 +1,306 @@
+//! The stateful VPL renderer: a sampler, a visibility structure and a
+//! shader on a backend, keeping their state (VPLs, shadow maps, the last
+//! indirect image) from frame to frame.
+
+use crate::backend::{Backend, CpuBackend};
+use crate::error::RenderError;
+use crate::frame::{FrameOutput, FrameSettings, render_frame_on};
+use crate::spec::{Clamp, ShadingSpec, VisibilitySpec};
+use std::time::Instant;
+use vpl_core::{Budget, Camera, GeometryClamp, Image, IndirectShader, Mode, Params, Scene, VplSampler, VplVisibility};
+use vpl_sampling::Registry;
+
+/// The sampler a [`RendererBuilder`] is given.
+pub enum SamplerChoice {
+    /// A registry name, built with the renderer's budget and the backend's
+    /// services, its settings read from the builder's parameters.
+    Named(String),
+    /// A sampler built by the caller (for the renderer's budget: the
+    /// caller's responsibility).
+    Built(Box<dyn VplSampler>),
+}
+
+impl From<&str> for SamplerChoice {
+    fn from(name: &str) -> SamplerChoice {
+        SamplerChoice::Named(name.into())
+    }
+}
+
+impl From<String> for SamplerChoice {
+    fn from(name: String) -> SamplerChoice {
+        SamplerChoice::Named(name)
+    }
+}
+
+impl From<Box<dyn VplSampler>> for SamplerChoice {
+    fn from(s: Box<dyn VplSampler>) -> SamplerChoice {
+        SamplerChoice::Built(s)
+    }
+}
+
+/// Builds a [`Renderer`]; every setting has the SMC paper's default.
+pub struct RendererBuilder<'a> {
+    scene: &'a Scene,
+    budget: Budget,
+    sampler: SamplerChoice,
+    params: Params,
+    registry: Option<&'a Registry>,
+    visibility: VisibilitySpec,
+    shading: ShadingSpec,
+    clamp: Clamp,
+    mode: Mode,
+    direct_samples: u32,
+    seed: u64,
+    backend: Option<Box<dyn Backend>>,
+}
+
+impl<'a> RendererBuilder<'a> {
+    /// The VPL budget I (2048 by default).
+    pub fn vpls(mut self, vpls: usize) -> Self {
+        self.budget.vpls = vpls;
+        self
+    }
+
+    /// The longest path in segments (5 by default: three indirect bounces).
+    pub fn max_depth(mut self, max_depth: u32) -> Self {
+        self.budget.max_depth = max_depth;
+        self
+    }
+
+    /// Budget and depth at once.
+    pub fn budget(mut self, budget: Budget) -> Self {
+        self.budget = budget;
+        self
+    }
+
+    /// The sampler: a registry name (`"smc"`) or a built sampler (`ir` by default).
+    pub fn sampler(mut self, sampler: impl Into<SamplerChoice>) -> Self {
+        self.sampler = sampler.into();
+        self
+    }
+
+    /// Settings of a named sampler (`m-max=8`, …); a key it does not read is
+    /// an error when the renderer is built.
+    pub fn params(mut self, params: Params) -> Self {
+        self.params = params;
+        self
+    }
+
+    /// The registry named samplers come from ([`Registry::builtin`] by default).
+    pub fn registry(mut self, registry: &'a Registry) -> Self {
+        self.registry = Some(registry);
+        self
+    }
+
+    /// VPL-to-pixel visibility (128² shadow maps by default).
+    pub fn visibility(mut self, visibility: VisibilitySpec) -> Self {
+        self.visibility = visibility;
+        self
+    }
+
+    /// Indirect shading (interleaved and filtered by default).
+    pub fn shader(mut self, shading: ShadingSpec) -> Self {
+        self.shading = shading;
+        self
+    }
+
+    /// The geometry-term clamp ([`Clamp::Auto`] by default).
+    pub fn clamp(mut self, clamp: Clamp) -> Self {
+        self.clamp = clamp;
+        self
+    }
+
+    /// Which paths frames include (all by default).
+    pub fn mode(mut self, mode: Mode) -> Self {
+        self.mode = mode;
+        self
+    }
+
+    /// Light samples per pixel of the direct light (16 by default).
+    pub fn direct_samples(mut self, n: u32) -> Self {
+        self.direct_samples = n;
+        self
+    }
+
+    /// Seed of every random stream (0 by default).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Where the stages run ([`CpuBackend`] by default).
+    pub fn backend(mut self, backend: impl Backend + 'static) -> Self {
+        self.backend = Some(Box::new(backend));
+        self
+    }
+
+    /// [`RendererBuilder::backend`] from a box.
+    pub fn boxed_backend(mut self, backend: Box<dyn Backend>) -> Self {
+        self.backend = Some(backend);
+        self
+    }
+
+    /// Builds the renderer, or says what is wrong.
+    pub fn build(self) -> Result<Renderer, RenderError> {
+        if self.budget.vpls == 0 {
+            return Err(RenderError::Invalid("the VPL budget must be at least 1".into()));
+        }
+        if self.budget.max_depth == 0 {
+            return Err(RenderError::Invalid("the max depth must be at least 1".into()));
+        }
+        if self.direct_samples == 0 {
+            return Err(RenderError::Invalid("direct light needs at least 1 sample per pixel".into()));
+        }
+        let backend = self.backend.unwrap_or_else(|| Box::new(CpuBackend));
+        let sampler = match self.sampler {
+            SamplerChoice::Built(s) => {
+                let keys = self.params.unused();
+                if !keys.is_empty() {
+                    let keys = keys.into_iter().map(String::from).collect();
+                    return Err(vpl_sampling::SamplingError::Unread { name: s.name().into(), keys, reads: Vec::new() }.into());
+                }
+                s
+            }
+            SamplerChoice::Named(name) => {
+                let builtin;
+                let registry = match self.registry {
+                    Some(r) => r,
+                    None => {
+                        builtin = Registry::builtin();
+                        &builtin
+                    }
+                };
+                registry.build(&name, self.budget, &backend.services(), &self.params)?
+            }
+        };
+        let clamp = self.clamp.resolve(self.budget.vpls, self.scene);
+        let visibility = backend.visibility(self.visibility, &self.budget)?;
+        let shader = backend.shader(self.shading, clamp, self.seed)?;
+        Ok(Renderer {
+            budget: self.budget,
+            mode: self.mode,
+            direct_samples: self.direct_samples,
+            seed: self.seed,
+            clamp,
+            backend,
+            sampler,
+            visibility,
+            shader,
+            previous: None,
+        })
+    }
+}
+
+/// A VPL renderer: the sampler, visibility and shader keep their state
+/// from frame to frame (unchanged VPLs keep their shadow maps; adaptive
+/// samplers read the last frame's indirect image).
+pub struct Renderer {
+    budget: Budget,
+    mode: Mode,
+    direct_samples: u32,
+    seed: u64,
+    clamp: Option<GeometryClamp>,
+    backend: Box<dyn Backend>,
+    sampler: Box<dyn VplSampler>,
+    visibility: Box<dyn VplVisibility>,
+    shader: Box<dyn IndirectShader>,
+    previous: Option<Image>,
+}
+
+impl Renderer {
+    /// A builder for frames of `scene` (the `auto` clamp reads its area).
+    pub fn builder(scene: &Scene) -> RendererBuilder<'_> {
+        RendererBuilder {
+            scene,
+            budget: Budget::default(),
+            sampler: SamplerChoice::Named("ir".into()),
+            params: Params::new(),
+            registry: None,
+            visibility: VisibilitySpec::default(),
+            shading: ShadingSpec::default(),
+            clamp: Clamp::Auto,
+            mode: Mode::Full,
+            direct_samples: 16,
+            seed: 0,
+            backend: None,
+        }
+    }
+
+    /// Renders frame `index` (at `time` seconds) of `scene` seen by `camera`.
+    pub fn render(&mut self, scene: &Scene, camera: &Camera, index: u64, time: f32) -> Result<FrameOutput, RenderError> {
+        let settings = FrameSettings {
+            mode: self.mode,
+            max_depth: self.budget.max_depth,
+            direct_samples: self.direct_samples,
+            seed: self.seed,
+            index,
+            time,
+        };
+        let t0 = Instant::now();
+        let gbuffer = self.backend.gbuffer(scene, camera)?;
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let out = render_frame_on(
+            gbuffer,
+            ms,
+            scene,
+            camera,
+            settings,
+            self.previous.as_ref(),
+            self.sampler.as_mut(),
+            self.visibility.as_mut(),
+            self.shader.as_mut(),
+        );
+        self.previous = out.indirect.clone();
+        Ok(out)
+    }
+
+    /// The budget and depth every stage reads.
+    pub fn budget(&self) -> Budget {
+        self.budget
+    }
+
+    /// The geometry clamp of the shader.
+    pub fn clamp(&self) -> Option<GeometryClamp> {
+        self.clamp
+    }
+
+    /// Which paths frames include.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The seed of every stream.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The backend.
+    pub fn backend(&self) -> &dyn Backend {
+        self.backend.as_ref()
+    }
+
+    /// The sampler.
+    pub fn sampler(&self) -> &dyn VplSampler {
+        self.sampler.as_ref()
+    }
+
+    /// The sampler, to change it between frames.
+    pub fn sampler_mut(&mut self) -> &mut dyn VplSampler {
+        self.sampler.as_mut()
+    }
+
+    /// The visibility structure.
+    pub fn visibility(&self) -> &dyn VplVisibility {
+        self.visibility.as_ref()
+    }
+
+    /// The indirect shader.
+    pub fn shader(&self) -> &dyn IndirectShader {
+        self.shader.as_ref()
+    }
+
+    /// The last frame's indirect image.
+    pub fn previous(&self) -> Option<&Image> {
+        self.previous.as_ref()
+    }
+}

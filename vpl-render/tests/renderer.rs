@@ -1,0 +1,74 @@
+//! The renderer builder against the stages assembled by hand: the same
+//! frames bit for bit; the budget set once reaches the sampler, the
+//! visibility and the clamp; bad settings are typed errors naming the key.
+
+use vpl_core::{GeometryClamp, Mode, Params, SceneSetup};
+use vpl_render::{Clamp, FrameSettings, RenderError, Renderer, ShadingSpec, VisibilitySpec, render_frame};
+use vpl_sampling::{InstantRadiosity, IrConfig, Registry, SamplingError};
+use vpl_shading::ExhaustiveShader;
+use vpl_visibility::RayTraced;
+
+#[test]
+fn the_builder_renders_what_the_stages_render_by_hand() {
+    let setup = SceneSetup::load("cornell").unwrap();
+    let camera = setup.camera.with_resolution((24, 24)).unwrap();
+    let mut renderer = Renderer::builder(&setup.scene)
+        .vpls(96)
+        .max_depth(4)
+        .sampler("ir")
+        .visibility(VisibilitySpec::RayTraced)
+        .shader(ShadingSpec::Exhaustive)
+        .mode(Mode::Full)
+        .direct_samples(2)
+        .seed(11)
+        .build()
+        .unwrap();
+    // The auto clamp reads the budget and the scene's area.
+    let clamp = GeometryClamp::for_budget(96, setup.scene.surface_area());
+    assert_eq!(renderer.clamp(), Some(clamp));
+    assert_eq!(renderer.budget().max_depth, 4);
+
+    let mut ir = InstantRadiosity::new(IrConfig { vpls: 96, bounces: 2, ..IrConfig::default() }).unwrap();
+    let mut vis = RayTraced::default();
+    let mut shader = ExhaustiveShader { clamp: Some(clamp) };
+    for index in 0..2 {
+        let built = renderer.render(&setup.scene, &camera, index, 0.0).unwrap();
+        let s = FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 2, seed: 11, index, time: 0.0 };
+        let by_hand = render_frame(&setup.scene, &camera, s, None, &mut ir, &mut vis, &mut shader);
+        assert_eq!(built.stored, by_hand.stored, "frame {index}");
+        assert!(built.image.data == by_hand.image.data, "frame {index}: the builder's image differs from the stages'");
+        assert!(built.image.mean()[0] > 0.0);
+        assert_eq!(built.sampler_stats.get("stored"), Some(built.stored as f64));
+    }
+}
+
+#[test]
+fn settings_are_checked_and_errors_name_the_key() {
+    let setup = SceneSetup::load("cornell").unwrap();
+    let build = |sampler: &str, params: &[&str], depth: u32| {
+        Renderer::builder(&setup.scene).vpls(64).max_depth(depth).sampler(sampler).params(Params::parse(params).unwrap()).build()
+    };
+    // A key the sampler does not read.
+    match build("ir", &["m-max=4"], 5) {
+        Err(RenderError::Sampling(SamplingError::Unread { keys, .. })) => assert_eq!(keys, ["m-max"]),
+        other => panic!("{:?}", other.err()),
+    }
+    // A value out of range names the key and the range.
+    let e = build("smc", &["knn-k=0"], 5).err().unwrap();
+    assert!(e.to_string().contains("knn-k=0"), "{e}");
+    // SMC needs indirect light: depth 2 has none.
+    assert!(matches!(build("smc", &[], 2), Err(RenderError::Sampling(SamplingError::Budget(..)))));
+    assert!(matches!(build("nope", &[], 5), Err(RenderError::Sampling(SamplingError::Unknown(..)))));
+    assert!(Renderer::builder(&setup.scene).vpls(0).build().is_err());
+    // No clamp when asked, and a sampler built by the caller runs as given.
+    let ir = InstantRadiosity::new(IrConfig { vpls: 32, ..IrConfig::default() }).unwrap();
+    let mut r =
+        Renderer::builder(&setup.scene).vpls(32).sampler(Box::new(ir) as Box<dyn vpl_core::VplSampler>).clamp(Clamp::Off).build().unwrap();
+    assert_eq!(r.clamp(), None);
+    let camera = setup.camera.with_resolution((8, 8)).unwrap();
+    // IR leaves a slot empty when its light path leaves the scene: at most 32 stored.
+    let stored = r.render(&setup.scene, &camera, 0, 0.0).unwrap().stored;
+    assert!(stored > 0 && stored <= 32, "{stored}");
+    // Registered samplers are found by name.
+    assert!(Renderer::builder(&setup.scene).registry(&Registry::builtin()).sampler("tcas").vpls(16).build().is_ok());
+}

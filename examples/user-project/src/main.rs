@@ -10,8 +10,7 @@
 #[path = "../../../vpl-bench/examples/user_sampler/uniform_area.rs"]
 mod uniform_area;
 
-use vpl_render::vpl_core::{Mode, SceneSetup};
-use vpl_render::{Registry, Renderer, VisibilitySpec};
+use vpl_render::Registry;
 
 fn registry() -> Registry {
     Registry::builtin().with(uniform_area::UniformArea::entry()).expect("the name is free")
@@ -24,6 +23,9 @@ fn main() {
 
 #[cfg(not(feature = "cli"))]
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    use vpl_render::vpl_core::{Mode, SceneSetup};
+    use vpl_render::{Renderer, VisibilitySpec};
+
     let registry = registry();
     let setup = SceneSetup::load("office")?;
     for sampler in ["uniform-area", "smc"] {

@@ -437,7 +437,22 @@ fn barycentrics(t: &TriangleData, p: Vec3) -> (f32, f32) {
     let denom = d00 * d11 - d01 * d01;
     let b1 = (d11 * d20 - d01 * d21) / denom;
     let b2 = (d00 * d21 - d01 * d20) / denom;
-    (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0 - b1.clamp(0.0, 1.0)))
+    // A long thin triangle can cancel the f32 denominator to zero: redo it in f64.
+    let (b1, b2) = if b1.is_finite() && b2.is_finite() { (b1, b2) } else { barycentrics_f64(t, p) };
+    // Neither is NaN now, so the clamps cannot panic.
+    let b1 = b1.clamp(0.0, 1.0);
+    (b1, b2.clamp(0.0, 1.0 - b1))
+}
+
+/// [`barycentrics`] in f64; the first vertex when even that cancels (a triangle
+/// of zero area never reaches here: the scene skips it).
+#[cold]
+fn barycentrics_f64(t: &TriangleData, p: Vec3) -> (f32, f32) {
+    let (e1, e2, v2) = (t.e1.as_dvec3(), t.e2.as_dvec3(), (p - t.p0).as_dvec3());
+    let (d00, d01, d11, d20, d21) = (e1.dot(e1), e1.dot(e2), e2.dot(e2), v2.dot(e1), v2.dot(e2));
+    let denom = d00 * d11 - d01 * d01;
+    let (b1, b2) = ((d11 * d20 - d01 * d21) / denom, (d00 * d21 - d01 * d20) / denom);
+    if b1.is_finite() && b2.is_finite() { (b1 as f32, b2 as f32) } else { (0.0, 0.0) }
 }
 
 #[cfg(test)]

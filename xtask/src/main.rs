@@ -80,31 +80,8 @@ fn target_dir() -> Result<PathBuf, String> {
     if !out.status.success() {
         return Err(format!("cargo metadata: {}", String::from_utf8_lossy(&out.stderr).trim()));
     }
-    let text = String::from_utf8_lossy(&out.stdout);
-    json_string(&text, "target_directory").map(PathBuf::from).ok_or_else(|| "cargo metadata: no target_directory".to_string())
-}
-
-/// The string value of the first `"key":"…"` in JSON text, unescaped.
-fn json_string(text: &str, key: &str) -> Option<String> {
-    let start = text.find(&format!("\"{key}\":\""))? + key.len() + 4;
-    let mut value = String::new();
-    let mut chars = text[start..].chars();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' => return Some(value),
-            '\\' => match chars.next()? {
-                'n' => value.push('\n'),
-                't' => value.push('\t'),
-                'u' => {
-                    let hex: String = chars.by_ref().take(4).collect();
-                    value.push(char::from_u32(u32::from_str_radix(&hex, 16).ok()?)?);
-                }
-                c => value.push(c),
-            },
-            c => value.push(c),
-        }
-    }
-    None
+    let meta: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|e| format!("cargo metadata: {e}"))?;
+    meta["target_directory"].as_str().map(PathBuf::from).ok_or_else(|| "cargo metadata: no target_directory".to_string())
 }
 
 fn test(args: &[String]) -> Result<(), String> {
@@ -541,17 +518,4 @@ fn render(vpl: &Path, scene: &str, mode: &str, spp: u32, out: &Path, stderr: Opt
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| format!("cannot write {}: {e}", path.display()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::json_string;
-
-    #[test]
-    fn json_strings_are_found_and_unescaped() {
-        let text = r#"{"packages":[],"target_directory":"/tmp/a \"b\"\\c","version":1}"#;
-        assert_eq!(json_string(text, "target_directory").as_deref(), Some("/tmp/a \"b\"\\c"));
-        assert_eq!(json_string(text, "workspace_root"), None);
-        assert_eq!(json_string(r#"{"k":"\u00e9"}"#, "k").as_deref(), Some("é"));
-    }
 }

@@ -46,6 +46,12 @@ pub struct Panel {
     pub seconds: f64,
 }
 
+/// One line of fig8.csv / fig9.csv for panel `p` of `scene`.
+fn csv_row(csv: &mut String, fig: &str, scene: &str, p: &Panel) {
+    let second = p.rmse_second.map_or(String::new(), |v| v.to_string());
+    let _ = writeln!(csv, "{fig},{scene},{},\"{}\",{},{},{second},{},{}", p.name, p.label, p.rmse, p.rel_mse, p.mean_ratio, p.seconds);
+}
+
 /// Settings of the figures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FigureSettings {
@@ -257,17 +263,7 @@ pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &Fig
                 p.mean_ratio,
                 p.seconds
             );
-            let _ = writeln!(
-                csv,
-                "fig8,{scene},{},\"{}\",{},{},{},{},{}",
-                p.name,
-                p.label,
-                p.rmse,
-                p.rel_mse,
-                p.rmse_second.map_or(String::new(), |v| v.to_string()),
-                p.mean_ratio,
-                p.seconds
-            );
+            csv_row(&mut csv, "fig8", scene, p);
         }
         md.push('\n');
         for p in f8 {
@@ -286,17 +282,7 @@ pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &Fig
                 p.rmse_second.map_or("–".into(), |v| format!("{v:.5}")),
                 p.seconds
             );
-            let _ = writeln!(
-                csv,
-                "fig9,{scene},{},\"{}\",{},{},{},{},{}",
-                p.name,
-                p.label,
-                p.rmse,
-                p.rel_mse,
-                p.rmse_second.map_or(String::new(), |v| v.to_string()),
-                p.mean_ratio,
-                p.seconds
-            );
+            csv_row(&mut csv, "fig9", scene, p);
         }
         md.push('\n');
         for p in f9 {

@@ -10,6 +10,8 @@
 
 #![warn(missing_docs)]
 
+pub mod fuzz;
+
 use std::path::PathBuf;
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, Scene, VplSet, VplVisibility};
 

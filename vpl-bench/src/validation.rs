@@ -43,10 +43,15 @@ pub fn validate_cornell(
     progress: &(dyn Fn(&str, u64, u64) + Sync),
 ) -> Result<Vec<ModeValidation>, CoreError> {
     let setup = SceneSetup::load("cornell")?;
-    let mut out = Vec::new();
-    for (name, mode, depth, stem) in MODES {
+    // Every reference is read (and checked) before any rendering starts.
+    let mut references = Vec::new();
+    for (_, _, _, stem) in MODES {
         let reference = Image::read_exr(data_dir.join(format!("{stem}.exr")))?;
         let reference_se = Image::read_exr(data_dir.join(format!("{stem}_stderr.exr")))?;
+        references.push((reference, reference_se));
+    }
+    let mut out = Vec::new();
+    for ((name, mode, depth, stem), (reference, reference_se)) in MODES.into_iter().zip(references) {
         let pt = PathTracer::new(depth, mode);
         let r = render(&setup.scene, &setup.camera, &pt, RenderSettings { spp, seed, frame: 0 }, &|d, t| progress(name, d, t))
             .map_err(|e| CoreError::Invalid(e.to_string()))?;

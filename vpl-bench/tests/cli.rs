@@ -312,7 +312,20 @@ fn gpu_backend_with_too_large_an_image_is_one_line() {
     let out = dir.join("out.exr");
     let o = vpl()
         .env("XDG_RUNTIME_DIR", &dir)
-        .args(["render", "--scene", "cornell", "--method", "vpl", "--backend", "gpu", "--size", "16384x16384", "--out"])
+        .args([
+            "render",
+            "--scene",
+            "cornell",
+            "--method",
+            "vpl",
+            "--backend",
+            "gpu",
+            "--size",
+            "16384x16384",
+            "--memory-limit",
+            "1T",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();

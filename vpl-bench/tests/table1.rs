@@ -67,9 +67,23 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
         assert!(read(&whole, f) == read(&split, f), "{f} differs between the whole and the sharded run");
     }
 
-    // Another spec into the same folder is refused.
-    let other = Table1Spec { seed: 4, ..spec };
-    assert!(matches!(table1::run(&reg, &other, &split, Shard::ALL, &mut |_| {}), Err(Table1Error::SpecMismatch(..))));
+    // Another spec into the same folder is refused, naming the setting.
+    let other = Table1Spec { seed: 4, ..spec.clone() };
+    let e = table1::run(&reg, &other, &split, Shard::ALL, &mut |_| {}).unwrap_err();
+    assert!(matches!(e, Table1Error::SpecMismatch(..)) && e.to_string().contains("seed: 3 (this run: 4)"), "{e}");
+    // Without spec.json, the units themselves refuse the other settings.
+    std::fs::remove_file(split.join("spec.json")).unwrap();
+    let e = table1::run(&reg, &other, &split, Shard::ALL, &mut |_| {}).unwrap_err();
+    assert!(matches!(e, Table1Error::UnitMismatch(..)) && e.to_string().contains("units/maze/") && e.to_string().contains("seed"), "{e}");
+    assert!(!split.join("spec.json").exists(), "a refused run wrote spec.json");
+    // A unit copied from a run at another size is refused when merging, naming the file and the size.
+    let small = fresh("small");
+    let at_other_size = Table1Spec { size: (spec.size.0, spec.size.1 + 8), ..spec.clone() };
+    table1::run(&reg, &at_other_size, &small, Shard::ALL, &mut |_| {}).unwrap();
+    std::fs::copy(small.join("units/maze/ir.json"), whole.join("units/maze/ir.json")).unwrap();
+    let e = table1::merge(&whole).unwrap_err().to_string();
+    assert!(e.contains("ir.json") && e.contains("size"), "{e}");
+    std::fs::remove_dir_all(&small).unwrap();
     std::fs::remove_dir_all(&whole).unwrap();
     std::fs::remove_dir_all(&split).unwrap();
 }

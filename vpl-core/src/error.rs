@@ -24,6 +24,52 @@ pub enum CoreError {
         /// What went wrong.
         reason: String,
     },
+    /// A path names something other than a regular file (a device, a pipe, a directory).
+    #[error("{path} is {kind}, not a regular file")]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is instead.
+        kind: &'static str,
+    },
+    /// An input file is longer than the limit for its kind
+    /// (see [`crate::input`]).
+    #[error("{path} has {size} bytes, more than the {limit} this kind of input may have")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size in bytes (or the bytes read before stopping).
+        size: u64,
+        /// The limit.
+        limit: u64,
+    },
+    /// A text input is not UTF-8.
+    #[error("{path} is not UTF-8 text (invalid byte at offset {offset})")]
+    Encoding {
+        /// The file.
+        path: PathBuf,
+        /// Byte offset of the first invalid byte.
+        offset: usize,
+    },
+    /// A material library (MTL) line is malformed or holds an impossible value.
+    #[error("{path}:{line}: {reason}")]
+    Mtl {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong, naming the statement and the value.
+        reason: String,
+    },
+    /// A scene value is non-finite or outside what the renderers can hold
+    /// (see [`crate::validate`]).
+    #[error("{what}: {reason}")]
+    BadValue {
+        /// The file, material or light, and the parameter.
+        what: String,
+        /// What is wrong with the value, quoting it.
+        reason: String,
+    },
     /// An OBJ file could not be parsed.
     #[error("malformed OBJ {path}: {reason}")]
     Obj {

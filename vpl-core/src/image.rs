@@ -48,11 +48,30 @@ impl Image {
 
     #[cfg(feature = "formats")]
     /// Reads the RGB channels of the first layer of an OpenEXR file.
+    ///
+    /// The file must be a regular file of at most
+    /// [`crate::input::MAX_IMAGE_BYTES`]; its header is read first and every
+    /// layer it declares must hold at most [`crate::input::MAX_IMAGE_PIXELS`]
+    /// pixels, so a header claiming a 10⁹ × 10⁹ window is refused before any
+    /// allocation. A NaN or infinite pixel is an error naming the pixel.
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Image> {
-        use exr::prelude::*;
         let path = path.as_ref();
-        if let Err(e) = std::fs::metadata(path) {
-            return Err(CoreError::Read { path: path.into(), source: e });
+        let bytes = crate::input::read_bytes(path, crate::input::MAX_IMAGE_BYTES)?;
+        Self::decode_exr(&bytes, path)
+    }
+
+    #[cfg(feature = "formats")]
+    /// Decodes the bytes of an OpenEXR file as [`Image::read_exr`] does;
+    /// `path` names it in messages.
+    pub fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image> {
+        use exr::prelude::*;
+        let bad = |reason: String| CoreError::Image(format!("{}: {reason}", path.display()));
+        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).map_err(|e| bad(e.to_string()))?;
+        for h in meta.headers.iter() {
+            let (w, hgt) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
+            if w.saturating_mul(hgt) > crate::input::MAX_IMAGE_PIXELS || w > u32::MAX as u64 || hgt > u32::MAX as u64 {
+                return Err(bad(format!("its header declares a {w} × {hgt} layer, more than {} pixels", crate::input::MAX_IMAGE_PIXELS)));
+            }
         }
         let img = read()
             .no_deep_data()
@@ -63,16 +82,32 @@ impl Image {
             )
             .first_valid_layer()
             .all_attributes()
-            .from_file(path)
-            .map_err(|e| CoreError::Image(format!("{}: {e}", path.display())))?;
-        Ok(img.layer_data.channel_data.pixels)
+            .from_buffered(std::io::Cursor::new(bytes))
+            .map_err(|e| bad(e.to_string()))?;
+        let img = img.layer_data.channel_data.pixels;
+        if let Some(i) = img.data.iter().position(|p| !p.is_finite()) {
+            let p = img.data[i];
+            let (x, y) = (i as u32 % img.width.max(1), i as u32 / img.width.max(1));
+            return Err(CoreError::BadValue {
+                what: format!("{} pixel ({x}, {y})", path.display()),
+                reason: format!("{} {} {} is not finite", p.x, p.y, p.z),
+            });
+        }
+        Ok(img)
     }
 
     #[cfg(feature = "formats")]
     /// Writes a 32-bit float RGB OpenEXR file, atomically.
     pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
-        use exr::prelude::*;
         let path = path.as_ref();
+        let bytes = self.encode_exr().map_err(|reason| CoreError::Write { path: path.into(), reason })?;
+        write_atomic(path, &bytes)
+    }
+
+    #[cfg(feature = "formats")]
+    /// The bytes of a 32-bit float RGB OpenEXR file of this image.
+    pub fn encode_exr(&self) -> std::result::Result<Vec<u8>, String> {
+        use exr::prelude::*;
         let layer = Layer::new(
             (self.width as usize, self.height as usize),
             LayerAttributes::named("rgb"),
@@ -83,12 +118,8 @@ impl Image {
             }),
         );
         let mut bytes = std::io::Cursor::new(Vec::new());
-        exr::image::Image::from_layer(layer)
-            .write()
-            .non_parallel()
-            .to_buffered(&mut bytes)
-            .map_err(|e| CoreError::Write { path: path.into(), reason: e.to_string() })?;
-        write_atomic(path, &bytes.into_inner())
+        exr::image::Image::from_layer(layer).write().non_parallel().to_buffered(&mut bytes).map_err(|e| e.to_string())?;
+        Ok(bytes.into_inner())
     }
 
     #[cfg(feature = "formats")]
@@ -149,8 +180,49 @@ pub fn preview_path(path: &Path) -> PathBuf {
     path.with_extension("png")
 }
 
+/// Temporary files being written now (removed by [`remove_temporaries`]).
+static IN_FLIGHT: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Removes the temporary files of writes in progress. A program calls it
+/// from its SIGINT/SIGTERM handler before exiting, so an interrupted write
+/// leaves neither a partial output nor a temporary file.
+pub fn remove_temporaries() {
+    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    for p in list.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// The temporary name of a write of `name` by process `pid`: `.NAME.PID.tmp`.
+fn temporary_name(name: &str, pid: u32) -> String {
+    format!(".{name}.{pid}.tmp")
+}
+
+/// Removes `.NAME.PID.tmp` files beside `NAME` left by writes of processes
+/// that no longer run (killed with SIGKILL, or a machine that went down).
+/// Where the process table cannot be read (no `/proc`), nothing is removed.
+fn remove_stale_temporaries(dir: &Path, name: &str) {
+    let proc = Path::new("/proc/self");
+    if !proc.exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let prefix = format!(".{name}.");
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".tmp")).and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new("/proc").join(pid.to_string()).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 /// Writes `bytes` to `path` atomically: a temporary file in the same
-/// directory, flushed, then renamed over `path`. On failure nothing is left behind.
+/// directory, flushed, then renamed over `path`. On failure nothing is left
+/// behind; the temporary is registered for [`remove_temporaries`] while it
+/// exists, and stale temporaries of the same output are removed first.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let err = |reason: String| CoreError::Write { path: path.into(), reason };
     let dir = match path.parent() {
@@ -160,19 +232,21 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     if !dir.is_dir() {
         return Err(err(format!("directory {} does not exist", dir.display())));
     }
-    let name = path.file_name().ok_or_else(|| err("no file name".into()))?;
-    let tmp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
+    let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
+    remove_stale_temporaries(&dir, &name);
+    let tmp = dir.join(temporary_name(&name, std::process::id()));
+    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
     let result = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
-    if let Err(e) = result {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(err(e.to_string()));
     }
-    Ok(())
+    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != &tmp);
+    result.map_err(|e| err(e.to_string()))
 }
 
 #[cfg(test)]
@@ -194,6 +268,53 @@ mod tests {
         img.write_png(dir.join("a.png"), 1.0).unwrap();
         assert!(img.write_exr(dir.join("missing/a.exr")).is_err());
         assert!(!dir.join("missing").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    #[cfg(feature = "formats")]
+    fn hostile_exr_headers_and_pixels_are_refused() {
+        let mut img = Image::new(2, 2);
+        img.data.fill(Vec3::splat(0.5));
+        let bytes = img.encode_exr().unwrap();
+        assert_eq!(Image::decode_exr(&bytes, Path::new("a.exr")).unwrap(), img);
+        // A header that claims a 10⁹ × 10⁹ data window (box2i: xmin ymin xmax ymax).
+        let mut huge = bytes.clone();
+        let tag = b"dataWindow\0box2i\0";
+        let at = huge.windows(tag.len()).position(|w| w == tag).unwrap() + tag.len() + 4;
+        for (k, v) in [0i32, 0, 1_000_000_000, 1_000_000_000].into_iter().enumerate() {
+            huge[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        let e = Image::decode_exr(&huge, Path::new("huge.exr")).unwrap_err().to_string();
+        assert!(e.contains("huge.exr"), "{e}");
+        // A NaN pixel.
+        img.data[3] = Vec3::new(0.0, f32::NAN, 0.0);
+        let e = Image::decode_exr(&img.encode_exr().unwrap(), Path::new("n.exr")).unwrap_err().to_string();
+        assert!(e.contains("n.exr pixel (1, 1)") && e.contains("not finite"), "{e}");
+        // Garbage and truncation.
+        assert!(Image::decode_exr(b"not an exr", Path::new("g.exr")).is_err());
+        assert!(Image::decode_exr(&bytes[..bytes.len() / 2], Path::new("t.exr")).is_err());
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn stale_temporaries_of_dead_writers_are_removed() {
+        let dir = std::env::temp_dir().join(format!("vpl-core-tmp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // PID 4194304 is above Linux's largest (2^22), so it never runs.
+        let dead = dir.join(temporary_name("a.exr", 4_194_304));
+        let alive = dir.join(temporary_name("a.exr", 1));
+        let other = dir.join(temporary_name("b.exr", 4_194_304));
+        for p in [&dead, &alive, &other] {
+            std::fs::write(p, b"partial").unwrap();
+        }
+        write_atomic(&dir.join("a.exr"), b"whole").unwrap();
+        assert!(!dead.exists(), "the dead writer's temporary stays");
+        assert_eq!(alive.exists(), Path::new("/proc/1").exists());
+        assert!(other.exists(), "another output's temporary was removed");
+        assert_eq!(std::fs::read(dir.join("a.exr")).unwrap(), b"whole");
+        let mine = dir.join(temporary_name("a.exr", std::process::id()));
+        assert!(!mine.exists() && !IN_FLIGHT.lock().unwrap().contains(&mine));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -55,10 +55,13 @@ pub mod gbuffer;
 pub mod halton;
 pub mod image;
 pub mod importons;
+pub mod input;
 pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod mode;
+#[cfg(feature = "formats")]
+pub mod mtl;
 #[cfg(feature = "formats")]
 pub mod obj;
 pub mod params;
@@ -76,6 +79,7 @@ pub mod stats;
 pub mod surface;
 pub mod traits;
 pub mod triangle;
+pub mod validate;
 pub mod vpl;
 
 pub use budget::Budget;

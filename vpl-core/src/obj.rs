@@ -1,10 +1,12 @@
-//! Wavefront OBJ + MTL loading through `tobj`.
+//! Wavefront OBJ loading through `tobj`, with the material libraries parsed by
+//! [`crate::mtl`].
 //!
 //! Mapping: `Kd` → diffuse albedo, `Ke` → emitted radiance (one-sided, along
 //! the face normal); textures are ignored (noted in a warning), as the VPL
 //! papers do for sampling; polygons are triangulated; negative (relative)
-//! indices are resolved; vertex normals become shading normals. A missing or
-//! unreadable MTL gives every face the default material and a warning.
+//! indices are resolved; vertex normals become shading normals. An
+//! MTL that does not exist gives its faces the default material and a
+//! warning, as does a `usemtl` naming no material; a malformed MTL is an error.
 //!
 //! A material with a specular colour (`Ks` ≠ 0) or transparency (`d` < 1,
 //! `Tr` > 0, or `illum` 6 / 7) gets the κ-layered model of
@@ -12,10 +14,14 @@
 //! `Kd` only, the path tracer and the progressive renderer the layers.
 
 use crate::error::{CoreError, Result};
+use crate::input::{self, MAX_MESH_BYTES, MAX_TEXT_BYTES};
 use crate::material::{Layered, Material};
 use crate::mesh::{Mesh, TriangleDesc};
+use crate::mtl::{MtlMaterial, parse_mtl};
 use glam::Vec3;
-use std::path::Path;
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 /// What an OBJ file holds: the mesh, its materials and what the loader noticed.
 #[derive(Clone, Debug)]
@@ -28,42 +34,56 @@ pub struct ObjData {
     pub warnings: Vec<String>,
 }
 
-/// Loads an OBJ file and its MTL.
+/// Loads an OBJ file and its material libraries.
+///
+/// The OBJ is read through [`crate::input`] (a regular file of at most
+/// [`MAX_MESH_BYTES`]), each MTL likewise (at most [`MAX_TEXT_BYTES`]) and
+/// parsed by [`crate::mtl`]. A library that does not exist gives a warning and
+/// the default material; one that is malformed, no regular file or too long is
+/// an error.
 pub fn load_obj(path: &Path) -> Result<ObjData> {
-    if let Err(e) = std::fs::metadata(path) {
-        return Err(CoreError::Read { path: path.into(), source: e });
-    }
-    let opts = tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
-    let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| CoreError::Obj { path: path.into(), reason: e.to_string() })?;
-    let mut warnings = Vec::new();
-    let mut materials: Vec<Material> = match mtl {
-        Ok(ms) => ms
-            .iter()
-            .map(|m| {
-                if m.diffuse_texture.is_some() {
-                    warnings.push(format!("{}: texture of material '{}' ignored (Kd used)", path.display(), m.name));
-                }
-                let kd = m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(0.5));
-                let ke = m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO);
-                let mut mat = Material::emissive(m.name.clone(), kd.clamp(Vec3::ZERO, Vec3::ONE), ke.max(Vec3::ZERO));
-                let tr = m.unknown_param.get("Tr").and_then(|v| v.trim().parse::<f32>().ok());
-                mat.layered = layered_from_mtl(
-                    m.specular.map(Vec3::from),
-                    m.shininess,
-                    m.dissolve.or(tr.map(|t| 1.0 - t)),
-                    m.optical_density,
-                    m.illumination_model,
-                );
-                mat
-            })
-            .collect(),
-        Err(e) => {
-            let libs = mtllib_names(path);
-            let named = if libs.is_empty() { "named by no mtllib line".to_string() } else { libs.join(", ") };
-            warnings.push(format!("{}: material library {named} not loaded ({e}); using the default material", path.display()));
-            Vec::new()
+    let bytes = input::read_bytes(path, MAX_MESH_BYTES)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_obj(&bytes, path, |name| {
+        let p = dir.join(name);
+        match input::read_text(&p, MAX_TEXT_BYTES) {
+            Err(CoreError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(e),
+            Ok(text) => Ok(Some((p, text))),
         }
-    };
+    })
+}
+
+/// Parses the bytes of an OBJ file; `path` names it in messages and
+/// `library` answers an `mtllib` name (as written in the file) with the
+/// library's path and text, `None` when it does not exist.
+pub fn parse_obj(bytes: &[u8], path: &Path, library: impl Fn(&str) -> Result<Option<(PathBuf, String)>>) -> Result<ObjData> {
+    let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
+    let mut warnings = Vec::new();
+    // The libraries are parsed here, not by tobj: tobj only learns each
+    // material's index (its own material list stays empty).
+    let state = RefCell::new(Libraries::default());
+    let opts = tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
+    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |name: &Path| {
+        state.borrow_mut().load(&name.to_string_lossy(), &library);
+        Ok((Vec::new(), state.borrow().index.clone().into_iter().collect()))
+    });
+    let libs = state.into_inner();
+    if let Some(e) = libs.error {
+        return Err(e);
+    }
+    let (models, _) = loaded.map_err(|e| CoreError::Obj { path: path.into(), reason: e.to_string() })?;
+    warnings.extend(libs.warnings);
+    let mut materials: Vec<Material> = Vec::with_capacity(libs.materials.len());
+    for m in &libs.materials {
+        if m.diffuse_texture.is_some() {
+            warnings.push(format!("{}: texture of material '{}' ignored (Kd used)", path.display(), m.name));
+        }
+        let mut mat = Material::emissive(m.name.clone(), m.kd.unwrap_or(Vec3::splat(0.5)), m.ke.unwrap_or(Vec3::ZERO));
+        mat.layered = layered_from_mtl(m.ks, m.ns, m.dissolve, m.ni, m.illum);
+        materials.push(mat);
+    }
+    warnings.extend(unknown_usemtl(bytes, path, &libs.index));
     let mut default_index: Option<u32> = None;
     let mut mesh = Mesh::default();
     for model in &models {
@@ -89,6 +109,79 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
         }
     }
     Ok(ObjData { mesh, materials, warnings })
+}
+
+/// The material libraries an OBJ names, merged in `mtllib` order.
+#[derive(Default)]
+struct Libraries {
+    materials: Vec<MtlMaterial>,
+    /// Material name → index in `materials` (a later library's name wins).
+    index: BTreeMap<String, usize>,
+    warnings: Vec<String>,
+    /// The first hard error; loading stops reporting it.
+    error: Option<CoreError>,
+}
+
+impl Libraries {
+    /// Loads the `mtllib` statement `names` (one file name, or several
+    /// separated by spaces when no file has the whole line as its name).
+    fn load(&mut self, names: &str, library: &impl Fn(&str) -> Result<Option<(PathBuf, String)>>) {
+        if self.error.is_some() {
+            return;
+        }
+        let names = names.trim();
+        match library(names) {
+            // `mtllib a.mtl b.mtl`: several libraries when no file has the whole line as its name.
+            Ok(None) if names.contains(char::is_whitespace) => {
+                for name in names.split_whitespace() {
+                    let answer = library(name);
+                    self.take(name, answer);
+                }
+            }
+            answer => self.take(names, answer),
+        }
+    }
+
+    fn take(&mut self, name: &str, answer: Result<Option<(PathBuf, String)>>) {
+        if self.error.is_some() {
+            return;
+        }
+        match answer.and_then(|a| a.map(|(p, text)| parse_mtl(&text, &p)).transpose()) {
+            Err(e) => self.error = Some(e),
+            Ok(None) => self.warnings.push(format!("material library {name} not found; its materials get the default material")),
+            Ok(Some(lib)) => {
+                self.warnings.extend(lib.warnings);
+                for m in lib.materials {
+                    self.index.insert(m.name.clone(), self.materials.len());
+                    self.materials.push(m);
+                }
+            }
+        }
+    }
+}
+
+/// Warnings for `usemtl` names that no library defines (their faces get the
+/// default material), one per name with the first line that uses it.
+fn unknown_usemtl(bytes: &[u8], path: &Path, index: &BTreeMap<String, usize>) -> Vec<String> {
+    let mut seen = BTreeMap::new();
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let Ok(line) = std::str::from_utf8(line) else { continue };
+        let line = line.trim();
+        if let Some(rest) = line.strip_prefix("usemtl") {
+            let name = rest.trim();
+            if rest.starts_with(char::is_whitespace) && !name.is_empty() && !index.contains_key(name) {
+                seen.entry(name.to_string()).or_insert(i + 1);
+            }
+        }
+    }
+    seen.into_iter()
+        .map(|(name, line)| {
+            format!(
+                "{}:{line}: usemtl '{name}' names no material of the loaded libraries; its faces get the default material",
+                path.display()
+            )
+        })
+        .collect()
 }
 
 /// The κ-layered parameters an MTL material describes, if any:
@@ -127,18 +220,67 @@ pub fn layered_from_mtl(ks: Option<Vec3>, ns: Option<f32>, dissolve: Option<f32>
     Some(Layered { kappa, specular, transmission, ior, abbe: 0.0 })
 }
 
-/// The file names of the `mtllib` statements of an OBJ file (for messages).
-fn mtllib_names(path: &Path) -> Vec<String> {
-    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
-    text.lines()
-        .filter_map(|l| l.trim_start().strip_prefix("mtllib "))
-        .flat_map(|rest| rest.split('#').next().unwrap_or("").split_whitespace().map(str::to_string).collect::<Vec<_>>())
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl lamp\nf 1 2 3 4\n";
+
+    fn with_mtl(obj: &str, mtl: &'static str) -> Result<ObjData> {
+        parse_obj(obj.as_bytes(), Path::new("s.obj"), |name| Ok((name == "s.mtl").then(|| (PathBuf::from("s.mtl"), mtl.to_string()))))
+    }
+
+    #[test]
+    fn libraries_are_parsed_by_the_toolkit() {
+        // One number for a colour is all three channels.
+        let d = with_mtl(&format!("mtllib s.mtl\n{QUAD}"), "newmtl lamp\nKd 0.8\nKe 10\n").unwrap();
+        assert_eq!(d.mesh.triangles.len(), 2);
+        assert_eq!((d.materials[0].albedo, d.materials[0].emission), (Vec3::splat(0.8), Vec3::splat(10.0)));
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        // A byte-order mark before mtllib.
+        let d = with_mtl(&format!("\u{feff}mtllib s.mtl\n{QUAD}"), "newmtl lamp\nKe 1 1 1\n").unwrap();
+        assert!(d.materials[0].is_emissive(), "{:?}", d.warnings);
+        // Two numbers: an error naming file, line and value (tobj 4.0.5 panics here).
+        let e = with_mtl(&format!("mtllib s.mtl\n{QUAD}"), "newmtl lamp\n\nKe 10 10\n").unwrap_err().to_string();
+        assert!(e.starts_with("s.mtl:3: Ke needs one or three numbers"), "{e}");
+        // An mtllib naming the OBJ itself.
+        let obj = format!("mtllib s.obj\n{QUAD}");
+        let e = parse_obj(obj.as_bytes(), Path::new("s.obj"), |_| Ok(Some((PathBuf::from("s.obj"), obj.clone())))).unwrap_err();
+        assert!(e.to_string().contains("no material library"), "{e}");
+    }
+
+    #[test]
+    fn missing_libraries_and_materials_are_warnings_naming_them() {
+        let d = with_mtl(&format!("mtllib other.mtl\n{QUAD}"), "").unwrap();
+        assert!(d.warnings.iter().any(|w| w.contains("other.mtl not found")), "{:?}", d.warnings);
+        let d = with_mtl(&format!("mtllib s.mtl\n{QUAD}"), "newmtl lump\nKe 1\n").unwrap();
+        assert!(d.warnings.iter().any(|w| w.contains("s.obj:6: usemtl 'lamp' names no material")), "{:?}", d.warnings);
+        assert_eq!(d.materials.last().unwrap().name, "default");
+        // Several libraries on one line.
+        let two = |name: &str| -> Result<Option<(PathBuf, String)>> {
+            Ok(match name {
+                "a.mtl" => Some(("a.mtl".into(), "newmtl wall\nKd 0.5\n".into())),
+                "b.mtl" => Some(("b.mtl".into(), "newmtl lamp\nKe 2\n".into())),
+                _ => None,
+            })
+        };
+        let d = parse_obj(format!("mtllib a.mtl b.mtl\n{QUAD}").as_bytes(), Path::new("s.obj"), two).unwrap();
+        assert_eq!(d.materials.len(), 2);
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn devices_are_refused_as_obj_and_as_mtl() {
+        let e = load_obj(Path::new("/dev/zero")).unwrap_err();
+        assert!(matches!(e, CoreError::NotAFile { .. }), "{e}");
+        let dir = std::env::temp_dir().join(format!("vpl-core-obj-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("s.obj"), format!("mtllib /dev/zero\n{QUAD}")).unwrap();
+        let e = load_obj(&dir.join("s.obj")).unwrap_err();
+        assert!(e.to_string().contains("/dev/zero is a device"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn mtl_maps_to_layers() {

@@ -94,6 +94,13 @@ impl Scene {
             if !p.is_finite() {
                 return Err(CoreError::NonFinite { what: name.clone(), index: i, value: format!("{} {} {}", p.x, p.y, p.z) });
             }
+            crate::validate::position(*p, &format!("{name}: vertex {i}"))?;
+        }
+        for m in &materials {
+            crate::validate::material(m).map_err(|e| match e {
+                CoreError::BadValue { what, reason } => CoreError::BadValue { what: format!("{name}: {what}"), reason },
+                e => e,
+            })?;
         }
         let mut warnings = Vec::new();
         let mut triangles = Vec::with_capacity(mesh.triangles.len());
@@ -179,6 +186,9 @@ impl Scene {
                 lights.push(Light::Area { triangle: i as u32, radiance: m.emission });
             }
         }
+        for (i, l) in extra_lights.iter().enumerate() {
+            crate::validate::light(l, i)?;
+        }
         lights.extend(extra_lights);
         let radius = self.radius();
         let powers: Vec<f32> = lights
@@ -188,6 +198,19 @@ impl Scene {
                 _ => l.power(0.0, radius),
             })
             .collect();
+        if let Some(i) = powers.iter().position(|p| !p.is_finite()) {
+            return Err(CoreError::BadValue {
+                what: format!("{}: light {i}", self.name),
+                reason: "its power (emission × area) overflows single precision; lower its emission or the scene's scale".into(),
+            });
+        }
+        let total: f64 = powers.iter().map(|&p| p as f64).sum();
+        if total > f32::MAX as f64 {
+            return Err(CoreError::BadValue {
+                what: format!("{}: lights", self.name),
+                reason: format!("their total power {total:e} overflows single precision"),
+            });
+        }
         let dist = Distribution1D::new(&powers).ok_or_else(|| CoreError::NoLights(self.name.clone()))?;
         self.lights = lights;
         self.tri_light = tri_light;

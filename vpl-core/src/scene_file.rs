@@ -249,7 +249,7 @@ impl SceneFile {
     /// Reads and parses a file.
     #[cfg(feature = "formats")]
     pub fn read(path: &Path) -> Result<SceneFile> {
-        let text = std::fs::read_to_string(path).map_err(|e| CoreError::Read { path: path.into(), source: e })?;
+        let text = crate::input::read_text(path, crate::input::MAX_TEXT_BYTES)?;
         Self::parse(&text, path)
     }
 

@@ -38,7 +38,12 @@ impl SceneSetup {
             #[cfg(feature = "formats")]
             Some("toml") => {
                 let file = SceneFile::read(path)?;
-                Self::from_file(file, path.parent().unwrap_or(Path::new(".")))
+                // Values the description holds are named with the file they come from.
+                Self::from_file(file, path.parent().unwrap_or(Path::new("."))).map_err(|e| match e {
+                    CoreError::BadValue { what, reason } => CoreError::BadValue { what: format!("{spec}: {what}"), reason },
+                    CoreError::Invalid(s) => CoreError::Invalid(format!("{spec}: {s}")),
+                    e => e,
+                })
             }
             #[cfg(not(feature = "formats"))]
             Some("toml") => Err(CoreError::Invalid(format!("{spec}: reading scene files needs vpl-core's `formats` feature"))),
@@ -153,7 +158,7 @@ impl SceneSetup {
 
 fn vec3(a: [f32; 3], what: &str) -> Result<Vec3> {
     let v = Vec3::from(a);
-    if v.is_finite() { Ok(v) } else { Err(CoreError::Invalid(format!("{what} must be finite"))) }
+    if v.is_finite() { Ok(v) } else { Err(CoreError::Invalid(format!("{what} must be finite, got {} {} {}", a[0], a[1], a[2]))) }
 }
 
 fn nonneg(a: [f32; 3], what: &str) -> Result<Vec3> {
@@ -163,10 +168,10 @@ fn nonneg(a: [f32; 3], what: &str) -> Result<Vec3> {
 
 fn apply_override(m: &mut Material, o: &crate::scene_file::MaterialSpec) -> Result<()> {
     if let Some(a) = o.albedo {
-        m.albedo = nonneg(a, "material albedo")?.min(Vec3::ONE);
+        m.albedo = nonneg(a, &format!("material '{}' albedo", o.name))?;
     }
     if let Some(e) = o.emission {
-        m.emission = nonneg(e, "material emission")?;
+        m.emission = nonneg(e, &format!("material '{}' emission", o.name))?;
     }
     if o.kappa.is_some() || o.specular.is_some() || o.transmission.is_some() || o.ior.is_some() || o.abbe.is_some() {
         let mut l = m.layered.clone().unwrap_or(Layered { kappa: 0.0, specular: Vec3::ZERO, transmission: 0.0, ior: 1.5, abbe: 0.0 });
@@ -177,10 +182,10 @@ fn apply_override(m: &mut Material, o: &crate::scene_file::MaterialSpec) -> Resu
             l.kappa = k;
         }
         if let Some(s) = o.specular {
-            l.specular = nonneg(s, "material specular")?;
+            l.specular = nonneg(s, &format!("material '{}' specular", o.name))?;
         }
         if let Some(t) = o.transmission {
-            l.transmission = t.clamp(0.0, 1.0);
+            l.transmission = t;
         }
         if let Some(i) = o.ior {
             l.ior = i;

@@ -41,6 +41,10 @@ pub enum RenderError {
     /// Samples per pixel must be at least one.
     #[error("spp must be at least 1")]
     ZeroSpp,
+    /// Paths gave NaN or infinite radiance at some pixels (a scene value the
+    /// load-time checks let through, or a defect): the image is refused.
+    #[error("path tracing produced {0} non-finite pixel(s)")]
+    NonFinite(usize),
     /// A thread pool could not be built.
     #[error("cannot start {0} threads: {1}")]
     Threads(usize, String),
@@ -90,6 +94,10 @@ pub fn render(
             image.set(x, y, m);
             stderr.set(x, y, e);
         }
+    }
+    let bad = image.data.iter().zip(&stderr.data).filter(|(m, e)| !(m.is_finite() && e.is_finite())).count();
+    if bad > 0 {
+        return Err(RenderError::NonFinite(bad));
     }
     Ok(RenderOutput { image, stderr, paths: total * s.spp as u64, seconds: start.elapsed().as_secs_f64() })
 }

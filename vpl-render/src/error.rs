@@ -33,6 +33,17 @@ pub enum RenderError {
         /// Frames in the sequence.
         count: u32,
     },
+    /// A stage produced NaN or infinite values (a scene value the load-time
+    /// checks let through, or a defect): the frame is refused, not shown.
+    #[error("frame {frame}: {stage} produced {count} non-finite value(s)")]
+    NonFinite {
+        /// The first stage that did.
+        stage: &'static str,
+        /// How many VPLs or pixels.
+        count: usize,
+        /// The frame index.
+        frame: u64,
+    },
     /// A tracked pixel lies outside the image.
     #[error("tracked pixel {0},{1} is outside the {2}x{3} image")]
     Pixel(u32, u32, u32, u32),

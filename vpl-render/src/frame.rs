@@ -66,6 +66,15 @@ pub struct FrameOutput {
     /// The indirect light the VPLs gave (`None` when the mode needs no
     /// VPLs): what adaptive samplers read as the previous frame's image.
     pub indirect: Option<Image>,
+    /// The first stage that produced NaN or infinite values, and how many
+    /// (VPL fluxes or pixels); `None` for a finite frame.
+    /// [`crate::Renderer::render`] turns it into [`crate::RenderError::NonFinite`].
+    pub non_finite: Option<(&'static str, usize)>,
+}
+
+/// Counts the non-finite pixels of `img`.
+pub fn count_non_finite(img: &Image) -> usize {
+    img.data.iter().filter(|p| !p.is_finite()).count()
 }
 
 fn ms(t: Instant) -> f64 {
@@ -115,6 +124,7 @@ pub fn render_frame_on(
     let mut moved = 0;
     let mut stored = 0;
     let mut indirect = None;
+    let mut non_finite = None;
     let (_, max_k) = s.mode.k_range(s.max_depth);
     if s.mode != Mode::Direct && max_k >= 2 {
         let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous };
@@ -123,16 +133,28 @@ pub fn render_frame_on(
         t.sampling_ms = ms(t0);
         moved = vpls.moved_count();
         stored = vpls.stored();
+        let bad = vpls.iter().filter(|(_, v)| !(v.flux.is_finite() && v.y.is_finite() && v.n.is_finite())).count();
+        if bad > 0 {
+            non_finite = Some(("the VPL sampler", bad));
+        }
         let t0 = Instant::now();
         visibility = vis.update(scene, vpls);
         t.visibility_ms = ms(t0);
         let t0 = Instant::now();
         image = shader.shade(&gbuffer, vpls, vis);
         t.shading_ms = ms(t0);
+        let bad = count_non_finite(&image);
+        if bad > 0 && non_finite.is_none() {
+            non_finite = Some(("indirect shading", bad));
+        }
         sampler_stats = sampler.stats();
         indirect = Some(image.clone());
     }
     if s.mode.includes(0, s.max_depth) {
+        let bad = gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count();
+        if bad > 0 && non_finite.is_none() {
+            non_finite = Some(("the G-buffer's emission", bad));
+        }
         for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
             *o += g.emitted;
         }
@@ -141,10 +163,18 @@ pub fn render_frame_on(
         let t0 = Instant::now();
         let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
         t.direct_ms = ms(t0);
+        let bad = count_non_finite(&d);
+        if bad > 0 && non_finite.is_none() {
+            non_finite = Some(("direct light", bad));
+        }
         for (o, d) in image.data.iter_mut().zip(&d.data) {
             *o += *d;
         }
     }
     t.total_ms = ms(start) + gbuffer_ms;
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect }
+    let bad = count_non_finite(&image);
+    if bad > 0 && non_finite.is_none() {
+        non_finite = Some(("the frame's sum", bad));
+    }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite }
 }

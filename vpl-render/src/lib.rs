@@ -62,6 +62,7 @@ mod backend;
 pub mod compare;
 mod error;
 mod frame;
+pub mod memory;
 pub mod metrics;
 mod renderer;
 pub mod sequence;
@@ -69,7 +70,8 @@ mod spec;
 
 pub use backend::{Backend, CpuBackend};
 pub use error::RenderError;
-pub use frame::{FrameOutput, FrameSettings, StageTimings, render_frame, render_frame_on};
+pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_on};
+pub use memory::MemoryEstimate;
 pub use renderer::{Renderer, RendererBuilder, SamplerChoice};
 pub use sequence::{SequenceFrame, default_tracked_pixels, run_sequence};
 pub use spec::{Clamp, ShadingSpec, VisibilitySpec};

@@ -250,6 +250,9 @@ impl Renderer {
             self.visibility.as_mut(),
             self.shader.as_mut(),
         );
+        if let Some((stage, count)) = out.non_finite {
+            return Err(RenderError::NonFinite { stage, count, frame: index });
+        }
         self.previous = out.indirect.clone();
         Ok(out)
     }

@@ -16,6 +16,9 @@
 //!   `office`, and the SMC sampler's steps (the SMC paper's Table 2) on `office` and `maze`.
 //! - `cargo xtask bench-gpu`: milliseconds per GPU kernel and per indirect frame at 1920×1080,
 //!   2048 SMC VPLs, `office` and `atrium`, and the adapter they ran on.
+//! - `cargo xtask fuzz [--seconds N] [--target obj|mtl|toml|exr|all] [--seed S]`: the loader
+//!   fuzz targets (`tests/src/fuzz.rs`) for N seconds (default 600) in release mode; prints the
+//!   executions and findings, writes findings to `target/fuzz-findings/`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -42,7 +45,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
      [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N] \
-     | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR]>"
+     | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
 
 fn main() -> ExitCode {
@@ -54,6 +57,7 @@ fn main() -> ExitCode {
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
         Some("bench-gpu") => bench_gpu(&args[1..]),
+        Some("fuzz") => fuzz(&args[1..]),
         _ => Err(usage().to_string()),
     };
     match result {
@@ -88,6 +92,16 @@ fn test(args: &[String]) -> Result<(), String> {
     let mut c = cargo();
     c.args(["test", "--workspace", "--no-fail-fast"]).args(args);
     run(c, "cargo test")
+}
+
+fn fuzz(args: &[String]) -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["run", "--release", "--quiet", "-p", "vpl-tests", "--bin", "vpl-fuzz", "--"]);
+    if !args.iter().any(|a| a == "--seconds") {
+        c.args(["--seconds", "600"]);
+    }
+    c.args(args);
+    run(c, "vpl-fuzz")
 }
 
 fn bench_pt(args: &[String]) -> Result<(), String> {

@@ -23,6 +23,34 @@ impl FromStr for Size {
     }
 }
 
+/// `--memory-limit`: bytes, or a number with K, M, G, T (powers of 1024;
+/// `KiB`, `GB`, … are read the same).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryArg(pub u64);
+
+impl FromStr for MemoryArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let t = s.trim();
+        let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+        let (num, unit) = t.split_at(split);
+        let value: f64 = num.trim().parse().map_err(|_| format!("memory limit '{s}' must look like 8G, 512M or a number of bytes"))?;
+        let scale: u64 = match unit.trim().to_ascii_uppercase().trim_end_matches('B').trim_end_matches('I') {
+            "" => 1,
+            "K" => 1 << 10,
+            "M" => 1 << 20,
+            "G" => 1 << 30,
+            "T" => 1 << 40,
+            _ => return Err(format!("memory limit '{s}': unknown unit '{unit}' (K, M, G or T)")),
+        };
+        let bytes = value * scale as f64;
+        if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+            return Err(format!("memory limit '{s}' must be positive"));
+        }
+        Ok(MemoryArg(bytes as u64))
+    }
+}
+
 /// `--pixel X,Y`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelArg(pub u32, pub u32);

@@ -78,7 +78,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         SceneSetup::load(sc).map_err(|e| e.to_string())?;
     }
     let pool = pool(threads)?;
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let dir = OutDir::create("--out", &out)?;
     let settings = figures::FigureSettings {
         size: (w, h),
         reference_spp: spp,
@@ -106,6 +106,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         }
         figures::write_fig10(&out, &figs, &settings).map_err(|e| e.to_string())?;
     }
+    dir.keep();
     eprintln!("vpl: figures -> {}", out.display());
     Ok(())
 }

@@ -22,6 +22,7 @@ mod export_scene;
 mod figures;
 mod georgiev;
 mod merge;
+mod output;
 mod progressive_figures;
 mod render;
 mod sequence;
@@ -30,7 +31,8 @@ mod table2;
 mod track;
 mod validate_cornell;
 
-pub use args::{ClampArg, FramesArg, PixelArg, Size};
+pub use args::{ClampArg, FramesArg, MemoryArg, PixelArg, Size};
+use output::{ImageOut, OutDir, Written, check_finite, distinct};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -38,7 +40,7 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use vpl_core::image::{preview_path, write_atomic};
+use vpl_core::image::write_atomic;
 use vpl_core::{Mode, SceneSetup};
 use vpl_pathtrace::{PathTracer, RenderSettings};
 use vpl_sampling::Registry;
@@ -121,9 +123,13 @@ struct SceneArgs {
     /// Seed of all random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
+    /// Refuse a render whose estimated memory exceeds this (e.g. 8G, 512M, or bytes; default: half
+    /// of this machine's physical memory).
+    #[arg(long)]
+    memory_limit: Option<MemoryArg>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -374,12 +380,25 @@ where
     }
 }
 
-/// [`run`] on the process's arguments; exits with its code.
+/// [`run`] on the process's arguments; exits with its code. SIGINT and
+/// SIGTERM remove the temporary files of writes in progress and the outputs
+/// of the unfinished command, then exit with 130.
 pub fn main(registry: &Registry) -> ! {
+    // Without a handler (another one is installed) the default action still ends the process;
+    // only the clean-up is lost, so the error is not fatal.
+    let _ = ctrlc::set_handler(|| {
+        output::interrupted();
+        eprintln!("vpl: interrupted; unfinished outputs removed");
+        std::process::exit(130);
+    });
     std::process::exit(run(registry, std::env::args_os()))
 }
 
 type Res<T> = Result<T, String>;
+
+/// The most worker threads `--threads` may ask for. Results do not depend on
+/// the thread count, so more threads than cores only cost memory.
+const MAX_THREADS: usize = 1024;
 
 fn pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
@@ -387,9 +406,46 @@ fn pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
         if n == 0 {
             return Err("--threads must be at least 1".into());
         }
+        if n > MAX_THREADS {
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            return Err(format!("--threads {n} is more than {MAX_THREADS} (this machine has {cores} cores)"));
+        }
         b = b.num_threads(n);
     }
     b.build().map_err(|e| format!("cannot start threads: {e}"))
+}
+
+/// The memory budget: `--memory-limit`, or half the physical memory (8 GiB
+/// where it cannot be read).
+fn memory_limit(arg: Option<MemoryArg>) -> (u64, String) {
+    match arg {
+        Some(MemoryArg(b)) => (b, "--memory-limit".into()),
+        None => match vpl_render::memory::physical_memory() {
+            Some(m) => (m / 2, format!("the default --memory-limit (half of this machine's {})", vpl_render::memory::human(m))),
+            None => (8 << 30, "the default --memory-limit (8 GiB; this machine's memory is unknown)".into()),
+        },
+    }
+}
+
+/// Refuses `estimate` beyond the budget, with one line naming the flags that drive its largest part.
+fn check_memory(estimate: &vpl_render::MemoryEstimate, arg: Option<MemoryArg>) -> Res<()> {
+    let (limit, what) = memory_limit(arg);
+    estimate.check(limit).map_err(|e| {
+        let flags: Vec<String> = e.largest.driver.iter().map(|d| format!("--{d}")).collect();
+        format!(
+            "this render needs about {}, more than the {} of {what}: {} is the largest part ({}); lower it or raise --memory-limit",
+            vpl_render::memory::human(e.estimate),
+            vpl_render::memory::human(e.limit),
+            e.largest.what,
+            flags.join(", ")
+        )
+    })
+}
+
+/// `memory: estimated X, peak Y` for summary lines.
+fn memory_line(estimate: &vpl_render::MemoryEstimate) -> String {
+    let peak = vpl_render::memory::peak_resident().map_or("unknown".to_string(), vpl_render::memory::human);
+    format!("memory: estimated {}, peak {peak}", vpl_render::memory::human(estimate.total()))
 }
 
 /// Fails early, before any work, if `path` cannot be written.

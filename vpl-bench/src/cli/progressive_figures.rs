@@ -94,7 +94,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         SceneSetup::load(sc).map_err(|e| e.to_string())?;
     }
     let pool = pool(threads)?;
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let dir = OutDir::create("--out", &out)?;
     let say = |m: &str| eprintln!("vpl: progressive figures: {m}");
     let fig7 = if only.contains(&7) {
         let s = pf::Fig7Settings {
@@ -131,6 +131,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let md = format!("# Progressive point-light rendering (Dammertz et al. 2010)\n\n{}", pf::report(fig7.as_ref(), &rows, seconds, ""));
     write_atomic(&out.join("progressive.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+    dir.keep();
     eprintln!("vpl: progressive figures -> {}", out.join("progressive.md").display());
     Ok(())
 }

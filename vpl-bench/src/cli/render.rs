@@ -37,7 +37,7 @@ pub(super) struct Args {
 /// Runs `vpl render`.
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args {
-        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads },
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit },
         method,
         mode,
         spp,
@@ -58,21 +58,56 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if !(exposure.is_finite() && exposure > 0.0) {
         return Err("--exposure must be positive".into());
     }
-    check_writable(&out)?;
-    if let Some(s) = &stderr {
-        check_writable(s)?;
-    }
+    let out = ImageOut::new("--out", &out, true)?;
+    let stderr = stderr.map(|s| ImageOut::new("--stderr", &s, false)).transpose()?;
+    let mut names = vec![("--out", out.path.as_path())];
+    names.extend(out.preview.as_deref().map(|p| ("the preview of --out", p)));
+    names.extend(stderr.as_ref().map(|s| ("--stderr", s.path.as_path())));
+    distinct(&names)?;
     let pool = pool(threads)?;
     if method == Method::Progressive {
-        return render_progressive(&scene, frame, size, seed, max_depth, clamp, vpls, &p, &out, stderr.as_deref(), exposure, quiet, &pool);
+        return render_progressive(
+            &scene,
+            frame,
+            size,
+            seed,
+            max_depth,
+            clamp,
+            vpls,
+            &p,
+            &out,
+            stderr.as_ref(),
+            exposure,
+            quiet,
+            memory_limit,
+            &pool,
+        );
     }
     if method == Method::Vpl {
         if stderr.is_some() {
             return Err("--stderr is for --method path: one VPL render has no per-pixel error estimate".into());
         }
-        return render_vpl(registry, &scene, frame, size, seed, max_depth, mode, clamp, vpls, &v, &out, exposure, quiet, &pool);
+        return render_vpl(
+            registry,
+            &scene,
+            frame,
+            size,
+            seed,
+            max_depth,
+            mode,
+            clamp,
+            vpls,
+            &v,
+            &out,
+            exposure,
+            quiet,
+            memory_limit,
+            &pool,
+        );
     }
     let (sc, camera) = load_frame(&scene, frame, size)?;
+    let estimate = vpl_render::MemoryEstimate::path_tracer(&sc, camera.resolution);
+    check_memory(&estimate, memory_limit)?;
     let pt = tracer(max_depth, mode, clamp, vpls, &sc);
     let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
     bar.set_style(
@@ -91,15 +126,16 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         .install(|| vpl_pathtrace::render(&sc, &camera, &pt, RenderSettings { spp, seed, frame: frame as u64 }, &progress))
         .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
-    r.image.write_exr(&out).map_err(|e| e.to_string())?;
-    r.image.write_png(preview_path(&out), exposure).map_err(|e| e.to_string())?;
+    let mut written = Written::default();
+    written.image(&r.image, &out, exposure, "the path tracer")?;
     if let Some(s) = &stderr {
-        r.stderr.write_exr(s).map_err(|e| e.to_string())?;
+        written.image(&r.stderr, s, 1.0, "the path tracer's standard error")?;
     }
+    written.keep();
     if !quiet {
         let m = r.image.mean();
         eprintln!(
-            "vpl: {} {}x{} {spp} spp in {:.2} s ({:.2} M paths/s), mean RGB {:.5} {:.5} {:.5} -> {}",
+            "vpl: {} {}x{} {spp} spp in {:.2} s ({:.2} M paths/s), mean RGB {:.5} {:.5} {:.5}, {} -> {}",
             sc.name,
             camera.resolution.0,
             camera.resolution.1,
@@ -108,7 +144,8 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
             m[0],
             m[1],
             m[2],
-            out.display()
+            memory_line(&estimate),
+            out.path.display()
         );
     }
     Ok(())
@@ -127,12 +164,16 @@ fn render_vpl(
     clamp: Option<ClampArg>,
     vpls: usize,
     v: &VplArgs,
-    out: &Path,
+    out: &ImageOut,
     exposure: f32,
     quiet: bool,
+    memory_limit: Option<MemoryArg>,
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
     let (sc, camera) = load_frame(scene, frame, size)?;
+    let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
+    let estimate = vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps);
+    check_memory(&estimate, memory_limit)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
     let mut p = build_renderer(&pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?, registry, &sc)?;
     p.backend().check_size(camera.resolution).map_err(crate::pipeline::backend_line)?;
@@ -140,8 +181,9 @@ fn render_vpl(
         eprintln!("vpl: GPU: {a}");
     }
     let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0)).map_err(crate::pipeline::backend_line)?;
-    r.image.write_exr(out).map_err(|e| e.to_string())?;
-    r.image.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    let mut written = Written::default();
+    written.image(&r.image, out, exposure, "the VPL frame")?;
+    written.keep();
     if !quiet {
         let t = r.timings;
         let m = r.image.mean();
@@ -156,7 +198,7 @@ fn render_vpl(
             );
         }
         eprintln!(
-            "vpl: {} {}x{} in {:.1} ms (G-buffer {:.1}, sampling {:.1}, visibility {:.1}, {} shading {:.1}, direct {:.1}), mean RGB {:.5} {:.5} {:.5} -> {}",
+            "vpl: {} {}x{} in {:.1} ms (G-buffer {:.1}, sampling {:.1}, visibility {:.1}, {} shading {:.1}, direct {:.1}), mean RGB {:.5} {:.5} {:.5}, {} -> {}",
             sc.name,
             camera.resolution.0,
             camera.resolution.1,
@@ -170,7 +212,8 @@ fn render_vpl(
             m[0],
             m[1],
             m[2],
-            out.display()
+            memory_line(&estimate),
+            out.path.display()
         );
     }
     Ok(())
@@ -187,10 +230,11 @@ fn render_progressive(
     clamp: Option<ClampArg>,
     vpls: usize,
     p: &ProgressiveArgs,
-    out: &Path,
-    stderr: Option<&Path>,
+    out: &ImageOut,
+    stderr: Option<&ImageOut>,
     exposure: f32,
     quiet: bool,
+    memory_limit: Option<MemoryArg>,
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
     use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
@@ -223,6 +267,8 @@ fn render_progressive(
         CullingArg::Off => Culling::Off,
     };
     let (sc, mut camera) = load_frame(scene, frame, size)?;
+    let estimate = vpl_render::MemoryEstimate::progressive(&sc, camera.resolution, p.caustic_paths, p.vpl_paths, max_depth);
+    check_memory(&estimate, memory_limit)?;
     if p.lens_radius.is_some() || p.focus_distance.is_some() {
         let r = p.lens_radius.unwrap_or(camera.lens_radius);
         let f = p.focus_distance.unwrap_or((camera.target - camera.origin).length());
@@ -254,9 +300,7 @@ fn render_progressive(
     };
     let mut r = Progressive::new(&sc, camera, config).map_err(|e| e.to_string())?;
     let passes = p.passes.unwrap_or(if p.seconds.is_some() { u64::MAX } else { 64 });
-    if let Some(d) = &p.snapshots {
-        std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
-    }
+    let snapshots = p.snapshots.as_deref().map(|d| OutDir::create("--snapshots", d)).transpose()?;
     let bar = if quiet {
         ProgressBar::hidden()
     } else if passes == u64::MAX {
@@ -276,9 +320,11 @@ fn render_progressive(
         last = pool.install(|| r.pass());
         bar.set_message(format!("{} VPLs, {} photons", last.stored, last.photons));
         bar.inc(1);
-        if let (Some(k), Some(d)) = (p.snapshot_every, &p.snapshots) {
+        if let (Some(k), Some(d)) = (p.snapshot_every, &snapshots) {
             if r.passes() % k == 0 {
-                r.image().write_exr(d.join(format!("pass_{:06}.exr", r.passes()))).map_err(|e| e.to_string())?;
+                let img = r.image();
+                check_finite(&img, &format!("progressive pass {}", r.passes()))?;
+                img.write_exr(d.path().join(format!("pass_{:06}.exr", r.passes()))).map_err(|e| e.to_string())?;
             }
         }
         if p.seconds.is_some_and(|t| start.elapsed().as_secs_f64() >= t) {
@@ -288,16 +334,20 @@ fn render_progressive(
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     let img = r.image();
-    img.write_exr(out).map_err(|e| e.to_string())?;
-    img.write_png(preview_path(out), exposure).map_err(|e| e.to_string())?;
+    let mut written = Written::default();
+    written.image(&img, out, exposure, "the progressive renderer")?;
     if let Some(s) = stderr {
-        r.stderr().write_exr(s).map_err(|e| e.to_string())?;
+        written.image(&r.stderr(), s, 1.0, "the progressive renderer's standard error")?;
+    }
+    written.keep();
+    if let Some(d) = snapshots {
+        d.keep();
     }
     if !quiet {
         let m = img.mean();
         let (w, h) = r.camera().resolution;
         eprintln!(
-            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} of {} VPLs stored, {} photons of which {} caustic, map coverage {:.1} %, {:.0} ms), mean RGB {:.5} {:.5} {:.5} -> {}",
+            "vpl: {} {w}x{h} progressive, {} passes in {secs:.2} s ({:.2} passes/s; last pass {} of {} VPLs stored, {} photons of which {} caustic, map coverage {:.1} %, {:.0} ms), mean RGB {:.5} {:.5} {:.5}, {} -> {}",
             sc.name,
             r.passes(),
             r.passes() as f64 / secs,
@@ -310,7 +360,8 @@ fn render_progressive(
             m[0],
             m[1],
             m[2],
-            out.display()
+            memory_line(&estimate),
+            out.path.display()
         );
     }
     Ok(())

@@ -33,8 +33,16 @@ pub(super) struct Args {
 
 /// Runs `vpl sequence`.
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
-    let Args { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, frames, mode, v, pixels, out, exposure, quiet } =
-        args;
+    let Args {
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit },
+        frames,
+        mode,
+        v,
+        pixels,
+        out,
+        exposure,
+        quiet,
+    } = args;
     if frame != 0 {
         return Err("--frame is for render; a sequence takes --frames A..B".into());
     }
@@ -45,6 +53,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if out.exists() && !out.is_dir() {
         return Err(format!("--out {} is not a directory", out.display()));
     }
+    check_writable(&out.join("frames.csv")).or_else(|e| if out.exists() { Err(e) } else { Ok(()) })?;
     let pool = pool(threads)?;
     let setup = SceneSetup::load(&scene).map_err(|e| e.to_string())?;
     for w in &setup.warnings {
@@ -53,19 +62,22 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let count = setup.sequence.as_ref().map_or(1, |q| q.frame_count());
     let range = frames.unwrap_or(FramesArg { start: 0, end: None }).range(count);
     crate::sequence::check_frames(&setup, &range).map_err(|e| format!("--{e}"))?;
+    let res = match size {
+        Some(Size(w, h)) => (w, h),
+        None => setup.camera.resolution,
+    };
+    let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
+    let estimate = vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps);
+    check_memory(&estimate, memory_limit)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
     let mut p = build_renderer(&pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?, registry, &setup.scene)?;
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }
-    let res = match size {
-        Some(Size(w, h)) => (w, h),
-        None => setup.camera.resolution,
-    };
     p.backend().check_size(res).map_err(crate::pipeline::backend_line)?;
     let tracked: Vec<(u32, u32)> =
         if pixels.is_empty() { crate::sequence::default_tracked_pixels(res.0, res.1) } else { pixels.iter().map(|p| (p.0, p.1)).collect() };
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let dir = OutDir::create("--out", &out)?;
     let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(range.len() as u64) };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:40}] frame {pos}/{len} {msg}, eta {eta}").unwrap().progress_chars("=> "),
@@ -88,16 +100,18 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         })
         .map_err(crate::pipeline::backend_line)?;
     bar.finish_and_clear();
+    dir.keep();
     if !quiet {
         let mean_ms = done.iter().map(|f| f.timings.total_ms).sum::<f64>() / done.len() as f64;
         let moved = done.iter().skip(1).map(|f| f.moved).max().unwrap_or(0);
         eprintln!(
-            "vpl: {} frames {}..{} with {} in {:.1} s ({mean_ms:.0} ms a frame; at most {moved} VPLs moved between frames) -> {}",
+            "vpl: {} frames {}..{} with {} in {:.1} s ({mean_ms:.0} ms a frame; at most {moved} VPLs moved between frames), {} -> {}",
             setup.scene.name,
             range.start,
             range.end,
             v.sampler,
             start.elapsed().as_secs_f64(),
+            memory_line(&estimate),
             out.display()
         );
     }

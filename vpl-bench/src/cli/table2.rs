@@ -34,10 +34,10 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         return Err("--frames must be at least 1".into());
     }
     let pool = pool(threads)?;
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     if let Some(bad) = scenes.iter().find(|s| !crate::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
         return Err(format!("--scene: '{bad}' is not a Table 2 scene (courtyard, office, atrium, maze)"));
     }
+    let dir = OutDir::create("--out", &out)?;
     let mut rows = Vec::new();
     let mut device = format!("this machine's CPU ({} threads)", pool.current_num_threads());
     for (paper, scene, _, vpls, _) in crate::table2::PAPER {
@@ -55,6 +55,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         rows.push(row);
     }
     crate::table2::write(&out, &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
+    dir.keep();
     eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
     Ok(())
 }

@@ -23,7 +23,7 @@ pub(super) struct Args {
 
 /// Runs `vpl track`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
-    let Args { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads }, mode, pixels, spp, out } = args;
+    let Args { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit }, mode, pixels, spp, out } = args;
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
@@ -33,6 +33,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let pool = pool(threads)?;
     let (sc, camera) = load_frame(&scene, frame, size)?;
+    check_memory(&vpl_render::MemoryEstimate::scene(&sc), memory_limit)?;
     let pt = tracer(max_depth, mode, clamp, vpls, &sc);
     let (w, h) = camera.resolution;
     if let Some(p) = pixels.iter().find(|p| p.0 >= w || p.1 >= h) {
@@ -40,6 +41,9 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let px: Vec<(u32, u32)> = pixels.iter().map(|p| (p.0, p.1)).collect();
     let ts = pool.install(|| vpl_pathtrace::track(&sc, &camera, &pt, &px, spp, seed, frame as u64));
+    if let Some(t) = ts.iter().find(|t| !(t.mean.is_finite() && t.stderr.is_finite())) {
+        return Err(format!("path tracing produced a non-finite value at pixel {},{}; nothing written", t.pixel.0, t.pixel.1));
+    }
     let mut csv = String::from("x,y,r,g,b,stderr_r,stderr_g,stderr_b,samples\n");
     for t in ts {
         csv.push_str(&format!(

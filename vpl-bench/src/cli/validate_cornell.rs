@@ -25,7 +25,6 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let bar = ProgressBar::new(3 * 256 * 256);
     bar.set_style(
         ProgressStyle::with_template("{msg:>9} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}").unwrap().progress_chars("=> "),
@@ -37,6 +36,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     })
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
+    let dir = OutDir::create("--out", &out)?;
     for v in &vs {
         crate::validation::write_difference(v, &out).map_err(|e| e.to_string())?;
         v.ours.0.write_png(out.join(format!("cornell_{}_ours.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
@@ -44,6 +44,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let md = crate::validation::report_markdown(&vs, spp);
     write_atomic(&out.join("cornell_validation.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+    dir.keep();
     print!("{md}");
     Ok(())
 }

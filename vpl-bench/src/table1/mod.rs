@@ -40,6 +40,9 @@ pub enum Table1Error {
     /// The output folder holds units of a run with other settings.
     #[error("{0} holds results of a run with other settings ({1}); use another --out or remove it")]
     SpecMismatch(PathBuf, String),
+    /// A unit file was made with other settings than the run's.
+    #[error("{0} was made with other settings than this run ({1}); remove it or use another --out")]
+    UnitMismatch(PathBuf, String),
     /// Units are missing when merging.
     #[error("{missing} of {total} units are missing in {dir} (first: {first}); run the shards that make them")]
     Missing {
@@ -94,6 +97,40 @@ pub struct Table1Spec {
     /// Where the VPL stages run (ground truth is always the CPU path tracer).
     #[serde(default)]
     pub backend: BackendKind,
+}
+
+impl Table1Spec {
+    /// A fingerprint of every setting (FNV-1a, 64 bits, over the spec's
+    /// JSON): every unit file records it, and a unit whose fingerprint
+    /// differs from the run's is refused.
+    pub fn hash(&self) -> String {
+        let text = serde_json::to_string(self).unwrap_or_default();
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in text.bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    /// The settings in which `other` differs from this spec, as
+    /// `key: theirs (this run: ours)`, joined by `; `.
+    pub fn differences(&self, other: &Table1Spec) -> String {
+        let (a, b) = (serde_json::to_value(self).unwrap_or_default(), serde_json::to_value(other).unwrap_or_default());
+        let short = |v: Option<&serde_json::Value>| {
+            let t = v.map_or("absent".to_string(), |v| v.to_string());
+            if t.chars().count() > 60 { format!("{}…", t.chars().take(60).collect::<String>()) } else { t }
+        };
+        let mut out = Vec::new();
+        if let (Some(a), Some(b)) = (a.as_object(), b.as_object()) {
+            for key in a.keys().chain(b.keys().filter(|k| !a.contains_key(*k))) {
+                if a.get(key) != b.get(key) {
+                    out.push(format!("{key}: {} (this run: {})", short(b.get(key)), short(a.get(key))));
+                }
+            }
+        }
+        if out.is_empty() { "no setting differs".into() } else { out.join("; ") }
+    }
 }
 
 /// The paper's ground-truth sample count per pixel (§5.2).
@@ -265,6 +302,10 @@ impl std::str::FromStr for Shard {
 /// Ground truth of one frame: the tracked pixels' indirect radiance.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TruthUnit {
+    /// The settings it was made with and their [`Table1Spec::hash`]
+    /// (absent in units of older versions, which are refused).
+    #[serde(default)]
+    pub settings: Option<UnitSettings>,
     /// Row id.
     pub row: String,
     /// Frame.
@@ -280,6 +321,10 @@ pub struct TruthUnit {
 /// One method's run of a sequence.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodUnit {
+    /// The settings it was made with and their [`Table1Spec::hash`]
+    /// (absent in units of older versions, which are refused).
+    #[serde(default)]
+    pub settings: Option<UnitSettings>,
     /// Row id.
     pub row: String,
     /// Method.
@@ -294,6 +339,38 @@ pub struct MethodUnit {
     pub ms: Vec<[f64; 5]>,
     /// Wall time of the unit in seconds.
     pub seconds: f64,
+}
+
+/// The record of the settings a unit was made with.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UnitSettings {
+    /// [`Table1Spec::hash`] of `spec`.
+    pub hash: String,
+    /// The whole spec, so a refusal can name the setting that differs.
+    pub spec: Table1Spec,
+}
+
+impl UnitSettings {
+    fn of(spec: &Table1Spec) -> UnitSettings {
+        UnitSettings { hash: spec.hash(), spec: spec.clone() }
+    }
+}
+
+/// Checks that the unit at `path` (with record `settings`) was made with `spec`.
+fn check_unit(path: &Path, settings: &Option<UnitSettings>, spec: &Table1Spec) -> Result<(), Table1Error> {
+    match settings {
+        None => Err(Table1Error::UnitMismatch(path.into(), "it records no settings: an older version made it".into())),
+        Some(u) if u.hash != spec.hash() || &u.spec != spec => Err(Table1Error::UnitMismatch(path.into(), spec.differences(&u.spec))),
+        Some(_) => Ok(()),
+    }
+}
+
+/// Reads the unit at `path` (truth or method, as its kind says) and checks its settings.
+fn check_unit_file(path: &Path, unit: Unit, spec: &Table1Spec) -> Result<(), Table1Error> {
+    match unit {
+        Unit::Truth { .. } => check_unit(path, &read_json::<TruthUnit>(path)?.settings, spec),
+        Unit::Method { .. } => check_unit(path, &read_json::<MethodUnit>(path)?.settings, spec),
+    }
 }
 
 /// Progress of a run, for a progress bar.
@@ -321,7 +398,8 @@ pub struct RunSummary {
 }
 
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, Table1Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))?;
+    let text =
+        vpl_core::input::read_text(path, vpl_core::input::MAX_TEXT_BYTES).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))?;
     serde_json::from_str(&text).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))
 }
 
@@ -350,12 +428,21 @@ pub fn run(
     if spec_path.exists() {
         let old: Table1Spec = read_json(&spec_path)?;
         if &old != spec {
-            return Err(Table1Error::SpecMismatch(dir.into(), format!("its profile is '{}'", old.profile)));
+            return Err(Table1Error::SpecMismatch(dir.into(), spec.differences(&old)));
         }
-    } else {
-        write_json(&spec_path, spec)?;
     }
     let units = spec.units();
+    // Units already in the folder (of any shard) must have been made with
+    // this spec, even when spec.json was removed or units were copied in.
+    for unit in &units {
+        let path = dir.join(spec.unit_file(*unit));
+        if path.exists() {
+            check_unit_file(&path, *unit, spec)?;
+        }
+    }
+    if !spec_path.exists() {
+        write_json(&spec_path, spec)?;
+    }
     let mine: Vec<(usize, Unit)> = units.iter().copied().enumerate().filter(|(k, _)| shard.owns(*k)).collect();
     let total: u64 = mine.iter().map(|(_, u)| spec.unit_weight(*u)).sum();
     let mut summary = RunSummary { total_units: units.len(), ..RunSummary::default() };
@@ -434,6 +521,7 @@ fn run_method(
     })
     .map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut u = MethodUnit {
+        settings: Some(UnitSettings::of(spec)),
         row: row.id.into(),
         method: method.into(),
         frames: Vec::new(),
@@ -471,6 +559,7 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
         Footprint::Centre,
     );
     Ok(TruthUnit {
+        settings: Some(UnitSettings::of(spec)),
         row: row.id.into(),
         frame,
         mean: t.iter().map(|p| p.mean.to_array()).collect(),
@@ -540,7 +629,9 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
         let mut se_sum = 0.0;
         let mut se_n = 0usize;
         for f in run.start..run.end {
-            let t: TruthUnit = read_json(&dir.join(spec.unit_file(Unit::Truth { row: ri, frame: f })))?;
+            let path = dir.join(spec.unit_file(Unit::Truth { row: ri, frame: f }));
+            let t: TruthUnit = read_json(&path)?;
+            check_unit(&path, &t.settings, &spec)?;
             truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
             for (m, s) in t.mean.iter().zip(&t.stderr) {
                 se_sum += tone_mapped_stderr(Vec3::from(*m), Vec3::from(*s));
@@ -549,7 +640,9 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
         }
         let mut methods = Vec::new();
         for (mi, name) in spec.methods.iter().enumerate() {
-            let u: MethodUnit = read_json(&dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })))?;
+            let path = dir.join(spec.unit_file(Unit::Method { row: ri, method: mi }));
+            let u: MethodUnit = read_json(&path)?;
+            check_unit(&path, &u.settings, &spec)?;
             if u.frames.len() != truth.len() {
                 return Err(Table1Error::Unit(
                     dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })),

@@ -1,0 +1,541 @@
+//! Loader fuzzing on the stable toolchain: real files (the Cornell boxes'
+//! OBJ and MTL, built-in scenes written as TOML, small EXRs) mutated by
+//! seeded byte- and token-level edits, each run through the `vpl` command in
+//! process, as a user would run it.
+//!
+//! An execution ends in one of three ways: the command accepts the input and
+//! writes a finite image (exit 0), refuses it with one line (exit 2), or
+//! breaks a promise: a panic, an exit 0 with a non-finite or missing image,
+//! a refusal that is not one line, or an output left behind by a failed
+//! command. The last kind is a *finding*; the fuzzer keeps its input.
+//!
+//! Every input is drawn from `stream(seed, 0, Purpose::TEST, execution)`, so
+//! a run is reproducible from its seed and execution index. Inputs that
+//! broke a promise once are kept in `tests/data/fuzz-regressions/<target>/`
+//! and replayed by every test run.
+
+use std::panic::AssertUnwindSafe;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use vpl_core::glam::Vec3;
+use vpl_core::{Image, Purpose, RngStream, SceneSetup, stream};
+
+/// What a fuzz target feeds the loaders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// A mutated OBJ beside its unmutated MTL, rendered.
+    Obj,
+    /// A mutated MTL beside its unmutated OBJ, rendered.
+    Mtl,
+    /// A mutated scene TOML (built-ins and an OBJ scene with lights,
+    /// overrides and a sequence), rendered.
+    Toml,
+    /// A mutated EXR, read as a reference image.
+    Exr,
+}
+
+impl Target {
+    /// All targets.
+    pub const ALL: [Target; 4] = [Target::Obj, Target::Mtl, Target::Toml, Target::Exr];
+
+    /// Its name (the folder of its regressions).
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Obj => "obj",
+            Target::Mtl => "mtl",
+            Target::Toml => "toml",
+            Target::Exr => "exr",
+        }
+    }
+
+    /// The target named `name`.
+    pub fn parse(name: &str) -> Option<Target> {
+        Target::ALL.into_iter().find(|t| t.name() == name)
+    }
+}
+
+/// How one execution ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Exit 0 with a finite image.
+    Accepted,
+    /// Exit 2 with one line.
+    Refused(String),
+    /// A broken promise, described.
+    Finding(String),
+}
+
+/// The unmutated inputs of a target: (file name, bytes) pairs; the first is
+/// the one mutated, the others are written beside it unchanged.
+pub struct Seed {
+    /// Files of the seed; `files[0]` is mutated.
+    pub files: Vec<(String, Vec<u8>)>,
+}
+
+fn data(rel: &str) -> Vec<u8> {
+    std::fs::read(crate::data_dir().join(rel)).unwrap_or_else(|e| panic!("fuzz seed {rel}: {e}"))
+}
+
+/// The seeds of `target`.
+pub fn seeds(target: Target) -> Vec<Seed> {
+    let cbox = ("cbox.obj".to_string(), data("cornell-box/cbox.obj"));
+    let cbox_mtl = ("cbox.mtl".to_string(), data("cornell-box/cbox.mtl"));
+    let orig = ("CornellBox-Original.obj".to_string(), data("mcguire/CornellBox-Original.obj"));
+    let orig_mtl = ("CornellBox-Original.mtl".to_string(), data("mcguire/CornellBox-Original.mtl"));
+    match target {
+        Target::Obj => vec![Seed { files: vec![cbox, cbox_mtl] }, Seed { files: vec![orig, orig_mtl] }],
+        Target::Mtl => vec![Seed { files: vec![cbox_mtl, cbox] }, Seed { files: vec![orig_mtl, orig] }],
+        Target::Toml => {
+            let mut v: Vec<Seed> = ["cornell", "courtyard", "corner"]
+                .iter()
+                .map(|b| Seed { files: vec![("s.toml".into(), SceneSetup::builtin(b).expect("built-in").to_toml().into_bytes())] })
+                .collect();
+            let obj_scene = "[geometry]\nobj = \"cbox.obj\"\nup = \"y\"\nscale = 1.0\n\n[camera]\norigin = [0, 0, 3.9]\ntarget = [0, 0, 0]\nfov = 39.3\n\
+                             resolution = [8, 6]\n\n[[lights]]\ntype = \"point\"\nposition = [0, 0.5, 0]\nintensity = [1, 1, 1]\n\n[[lights]]\n\
+                             type = \"spot\"\nposition = [0, 0.9, 0]\ndirection = [0, -1, 0]\nintensity = [2, 2, 2]\nangle = 40\n\n[[materials]]\n\
+                             name = \"leftWall\"\nalbedo = [0.6, 0.1, 0.1]\nkappa = 0.5\nspecular = [0.2, 0.2, 0.2]\n\n[sequence]\nfps = 2\nduration = 1\n\
+                             camera = [ { t = 0, origin = [0, 0, 3.9], target = [0, 0, 0] } ]\nlights = [ { light = 0, t = 1, position = [0.2, 0.5, 0] } ]\n";
+            v.push(Seed { files: vec![("s.toml".into(), obj_scene.as_bytes().to_vec()), cbox, cbox_mtl] });
+            v
+        }
+        Target::Exr => {
+            let mut small = Image::new(4, 3);
+            for (i, p) in small.data.iter_mut().enumerate() {
+                *p = Vec3::new(i as f32 * 0.1, 0.5, 1.0 / (1.0 + i as f32));
+            }
+            let reference = Image::read_exr(crate::data_dir().join("cornell-box/reference_indirect.exr")).expect("reference EXR");
+            let reference = vpl_render::metrics::downsample(&reference, 16).expect("256 is a multiple of 16");
+            [small, reference].iter().map(|i| Seed { files: vec![("r.exr".into(), i.encode_exr().expect("encode"))] }).collect()
+        }
+    }
+}
+
+/// Tokens the mutator writes over numbers and names.
+const VALUES: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "NaN",
+    "1e38",
+    "3e38",
+    "-3e38",
+    "1e39",
+    "0",
+    "-0",
+    "1e-45",
+    "1e-30",
+    "99999999999",
+    "-1",
+    "1e10",
+    "1e20",
+    "4294967295",
+    "-2147483648",
+    "18446744073709551616",
+    "",
+    "0x10",
+    "1_0",
+    "+",
+    "-",
+    ".",
+    "e",
+    "2e",
+    "1.0.0",
+];
+/// Whole lines the mutator inserts, by target.
+fn lines(target: Target) -> &'static [&'static str] {
+    match target {
+        Target::Obj => &[
+            "mtllib /dev/zero",
+            "mtllib cbox.obj",
+            "mtllib missing.mtl",
+            "mtllib cbox.mtl cbox.mtl",
+            "usemtl nothere",
+            "usemtl",
+            "\u{feff}mtllib cbox.mtl",
+            "f 1 2",
+            "f 1",
+            "f",
+            "f -1 -2 -3",
+            "f 0 0 0",
+            "f 99999 1 2",
+            "f 1/1/1 2/2/2 3/3/3",
+            "f 1//99 2//1 3//1",
+            "f -9999 -1 -2",
+            "v 1e30 0 0",
+            "v 0 4000 0",
+            "v nan 0 0",
+            "v 1 2",
+            "vn 0 0 0",
+            "vn nan 1 0",
+            "vt 0.5",
+            "o",
+            "g x",
+            "s off",
+            "l 1 2",
+            "p 1",
+            "v 1 2 3 4 5 6 7",
+        ],
+        Target::Mtl => &[
+            "Kd 0.8",
+            "Ke 10 10",
+            "Ke inf 1 1",
+            "Ke 3e38",
+            "Kd 1.5",
+            "Ks 1 1",
+            "Ka 1 1",
+            "Tf 1",
+            "Ns -5",
+            "Ni 0",
+            "d -halo",
+            "d 2",
+            "Tr 0.5",
+            "illum 99",
+            "illum -1",
+            "newmtl",
+            "newmtl light",
+            "newmtl dup",
+            "map_Kd",
+            "map_Kd tex.png",
+            "v 0 0 0",
+            "Kd spectral a.rfl",
+            "Kd xyz 1 1 1",
+            "\u{feff}newmtl x",
+        ],
+        Target::Toml => &[
+            "scale = 1e30",
+            "scale = 0",
+            "up = \"x\"",
+            "up = \"z\"",
+            "obj = \"/dev/zero\"",
+            "obj = \"cbox.mtl\"",
+            "obj = \"missing.obj\"",
+            "builtin = \"nothere\"",
+            "emission = [3e38, 3e38, 3e38]",
+            "albedo = [2, 2, 2]",
+            "fov = 0",
+            "fov = 179.9",
+            "resolution = [0, 0]",
+            "resolution = [100000, 100000]",
+            "duration = 1e30",
+            "fps = 1e-30",
+            "fps = 1e9",
+            "lens_radius = 1e30",
+            "focus_distance = 0",
+            "[[lights]]\ntype = \"point\"\nposition = [0, 1e30, 0]\nintensity = [1, 1, 1]",
+            "[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = [1, 1, 1]",
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, -1, 0]\nintensity = [1e38, 1, 1]\nangle = 1e-30",
+            "[[materials]]\nname = \"nothere\"",
+            "[[materials]]\nname = \"light\"\nemission = [1e12, 1e12, 1e12]",
+            "[[materials]]\nname = \"floor\"\nior = 0\ntransmission = 2",
+        ],
+        Target::Exr => &[],
+    }
+}
+
+fn pick<'a, T>(rng: &mut RngStream, items: &'a [T]) -> &'a T {
+    &items[rng.below(items.len() as u32) as usize]
+}
+
+/// Byte ranges of the number-like tokens of `text`.
+fn tokens(bytes: &[u8]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i].is_ascii_digit() || bytes[i] == b'-' || bytes[i] == b'.' {
+            let s = i;
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || matches!(bytes[i], b'-' | b'.' | b'+')) {
+                i += 1;
+            }
+            out.push((s, i));
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The largest input the mutator makes (bytes).
+pub const MAX_INPUT: usize = 1 << 18;
+
+/// One to four seeded edits of `input`.
+pub fn mutate(input: &[u8], target: Target, rng: &mut RngStream) -> Vec<u8> {
+    let mut b = input.to_vec();
+    let edits = 1 + rng.below(4);
+    for _ in 0..edits {
+        let textual = target != Target::Exr;
+        match rng.below(if textual { 10 } else { 6 }) {
+            // Flip a bit.
+            0 if !b.is_empty() => {
+                let i = rng.below(b.len() as u32) as usize;
+                b[i] ^= 1 << rng.below(8);
+            }
+            // Overwrite a byte with an interesting one.
+            1 if !b.is_empty() => {
+                let i = rng.below(b.len() as u32) as usize;
+                b[i] = *pick(rng, &[0u8, 0xff, 0x7f, 0x80, b'\n', b' ', b'#', b'/', b'-', b'9', b'"', b'[', b'=']);
+            }
+            // Truncate.
+            2 if !b.is_empty() => {
+                let i = rng.below(b.len() as u32) as usize;
+                b.truncate(i);
+            }
+            // Overwrite a little-endian u32 / f32 (headers, sizes, pixels).
+            3 if b.len() >= 4 => {
+                let i = rng.below(b.len() as u32 - 3) as usize;
+                let v: u32 = *pick(
+                    rng,
+                    &[0, 1, u32::MAX, 0x7fff_ffff, 0x8000_0000, 1_000_000_000, f32::NAN.to_bits(), f32::INFINITY.to_bits(), 65536],
+                );
+                b[i..i + 4].copy_from_slice(&v.to_le_bytes());
+            }
+            // Delete or duplicate a range.
+            4 if !b.is_empty() => {
+                let i = rng.below(b.len() as u32) as usize;
+                let n = (1 + rng.below(64) as usize).min(b.len() - i);
+                if rng.below(2) == 0 {
+                    b.drain(i..i + n);
+                } else {
+                    let chunk = b[i..i + n].to_vec();
+                    b.splice(i..i, chunk);
+                }
+            }
+            // Random bytes.
+            5 => {
+                let i = rng.below(b.len() as u32 + 1) as usize;
+                let n = 1 + rng.below(16) as usize;
+                let junk: Vec<u8> = (0..n).map(|_| rng.below(256) as u8).collect();
+                b.splice(i..i, junk);
+            }
+            // Replace a number.
+            6 => {
+                let t = tokens(&b);
+                if !t.is_empty() {
+                    let (s, e) = *pick(rng, &t);
+                    b.splice(s..e, pick(rng, VALUES).bytes());
+                }
+            }
+            // Insert a line from the dictionary.
+            7 => {
+                let l = lines(target);
+                if !l.is_empty() {
+                    let starts: Vec<usize> =
+                        std::iter::once(0).chain(b.iter().enumerate().filter(|(_, c)| **c == b'\n').map(|(i, _)| i + 1)).collect();
+                    let at = *pick(rng, &starts);
+                    let line = format!("{}\n", pick(rng, l));
+                    b.splice(at..at, line.bytes());
+                }
+            }
+            // Delete, duplicate or swap lines.
+            8 | 9 => {
+                let text = String::from_utf8_lossy(&b).into_owned();
+                let mut ls: Vec<&str> = text.split('\n').collect();
+                if ls.len() >= 2 {
+                    let i = rng.below(ls.len() as u32) as usize;
+                    let j = rng.below(ls.len() as u32) as usize;
+                    match rng.below(3) {
+                        0 => {
+                            ls.remove(i);
+                        }
+                        1 => ls.insert(j, ls[i]),
+                        _ => ls.swap(i, j),
+                    }
+                    b = ls.join("\n").into_bytes();
+                }
+            }
+            _ => {}
+        }
+    }
+    b.truncate(MAX_INPUT);
+    b
+}
+
+/// The `vpl` arguments of the `variant`-th way of rendering a fuzzed scene:
+/// the path tracer, IR VPLs with ray-traced and with shadow-map visibility,
+/// and the progressive renderer, all at 8×6.
+fn command(scene: &Path, out: &Path, variant: u64) -> Vec<String> {
+    let mut a: Vec<String> = ["vpl", "render", "--scene"].map(String::from).to_vec();
+    a.push(scene.display().to_string());
+    let rest: &[&str] = match variant % 4 {
+        0 => &["--method", "path", "--spp", "2", "--max-depth", "4"],
+        1 => &[
+            "--method",
+            "vpl",
+            "--sampler",
+            "ir",
+            "--vpls",
+            "16",
+            "--visibility",
+            "raytrace",
+            "--shading",
+            "exhaustive",
+            "--direct-samples",
+            "2",
+        ],
+        2 => &["--method", "vpl", "--sampler", "ir", "--vpls", "16", "--shadowmap-res", "16", "--direct-samples", "2"],
+        _ => &["--method", "progressive", "--passes", "1", "--vpl-paths", "4", "--caustic-paths", "64"],
+    };
+    a.extend(rest.iter().map(|s| s.to_string()));
+    a.extend(["--size", "8x6", "--threads", "1", "--quiet", "--out"].map(String::from));
+    a.push(out.display().to_string());
+    a
+}
+
+static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
+/// Executions under way in this process (a panic hook cannot tell a worker
+/// thread of a target from a test's own thread).
+static RUNNING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Keeps the message of a panic inside a fuzz execution for [`run_one`]
+/// instead of printing it (a fuzz run would print thousands); panics outside
+/// executions (a failing assertion of a test) print as usual.
+pub fn quiet_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if RUNNING.load(std::sync::atomic::Ordering::SeqCst) == 0 {
+                return previous(info);
+            }
+            let at = info.location().map(|l| format!(" at {}:{}", l.file(), l.line())).unwrap_or_default();
+            let msg = info
+                .payload()
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| info.payload().downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "panic".into());
+            *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{msg}{at}"));
+        }));
+    });
+}
+
+/// Runs `input` (the mutated `seed.files[0]`) through `target` in the empty
+/// folder `dir`; `variant` picks the renderer. The folder is emptied after.
+pub fn run_one(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) -> Outcome {
+    RUNNING.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let caught = std::panic::catch_unwind(AssertUnwindSafe(|| execute(target, seed, input, dir, variant)));
+    RUNNING.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+    let outcome = caught.unwrap_or_else(|_| {
+        Outcome::Finding(format!("panic: {}", LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()).take().unwrap_or_default()))
+    });
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+    outcome
+}
+
+fn execute(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) -> Outcome {
+    if target == Target::Exr {
+        return match Image::decode_exr(input, Path::new("r.exr")) {
+            Ok(img) if img.data.iter().all(|p| p.is_finite()) => Outcome::Accepted,
+            Ok(_) => Outcome::Finding("an EXR with a non-finite pixel was accepted".into()),
+            Err(e) => Outcome::Refused(e.to_string()),
+        };
+    }
+    for (i, (name, bytes)) in seed.files.iter().enumerate() {
+        let bytes = if i == 0 { input } else { bytes };
+        if let Err(e) = std::fs::write(dir.join(name), bytes) {
+            return Outcome::Finding(format!("cannot write the input: {e}"));
+        }
+    }
+    let scene = dir.join(match target {
+        Target::Mtl => &seed.files[1].0,
+        _ => &seed.files[0].0,
+    });
+    let out = dir.join("out.exr");
+    let before: Vec<PathBuf> = listing(dir);
+    let code = vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), command(&scene, &out, variant));
+    match code {
+        0 => match Image::read_exr(&out) {
+            Ok(img) if img.data.iter().all(|p| p.is_finite()) => {
+                if dir.join("out.png").is_file() {
+                    Outcome::Accepted
+                } else {
+                    Outcome::Finding("exit 0 without the PNG preview".into())
+                }
+            }
+            Ok(_) => Outcome::Finding("exit 0 with a non-finite pixel".into()),
+            Err(e) => Outcome::Finding(format!("exit 0 but the output does not read back: {e}")),
+        },
+        2 => {
+            let left: Vec<PathBuf> = listing(dir).into_iter().filter(|p| !before.contains(p)).collect();
+            if left.is_empty() { Outcome::Refused("exit 2".into()) } else { Outcome::Finding(format!("exit 2 left {left:?} behind")) }
+        }
+        c => Outcome::Finding(format!("exit code {c}")),
+    }
+}
+
+fn listing(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir).map(|r| r.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// Counts of a fuzz run.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// Executions.
+    pub executions: u64,
+    /// Inputs accepted (exit 0, finite image).
+    pub accepted: u64,
+    /// Inputs refused with one line.
+    pub refused: u64,
+    /// Broken promises.
+    pub findings: Vec<Finding>,
+}
+
+/// An input that broke a promise.
+#[derive(Clone, Debug)]
+pub struct Finding {
+    /// Execution index (with the run's seed, it redraws the input).
+    pub execution: u64,
+    /// Index of the seed it mutated (see [`seeds`]).
+    pub seed: usize,
+    /// What went wrong.
+    pub what: String,
+    /// The input.
+    pub input: Vec<u8>,
+}
+
+/// Runs executions `first..` of `target` with `seed` until `stop(done)` says
+/// so, in the scratch folder `dir`.
+pub fn run(target: Target, seed: u64, first: u64, dir: &Path, mut stop: impl FnMut(u64) -> bool) -> Report {
+    let seeds = seeds(target);
+    let mut report = Report::default();
+    std::fs::create_dir_all(dir).expect("fuzz scratch folder");
+    let mut i = first;
+    while !stop(report.executions) {
+        let mut rng = stream(seed, target as u64, Purpose::TEST, i);
+        let k = rng.below(seeds.len() as u32) as usize;
+        let input = mutate(&seeds[k].files[0].1, target, &mut rng);
+        match run_one(target, &seeds[k], &input, dir, i) {
+            Outcome::Accepted => report.accepted += 1,
+            Outcome::Refused(_) => report.refused += 1,
+            Outcome::Finding(what) => report.findings.push(Finding { execution: i, seed: k, what, input }),
+        }
+        report.executions += 1;
+        i += 1;
+    }
+    report
+}
+
+/// The regression inputs of `target`: `tests/data/fuzz-regressions/<target>/*`,
+/// each named `<seed index>-<anything>` (the seed whose other files go beside it).
+pub fn regressions(target: Target) -> Vec<(PathBuf, usize, Vec<u8>)> {
+    let dir = crate::data_dir().join("fuzz-regressions").join(target.name());
+    let mut v: Vec<(PathBuf, usize, Vec<u8>)> = std::fs::read_dir(&dir)
+        .map(|r| {
+            r.flatten()
+                .filter_map(|e| {
+                    let p = e.path();
+                    let name = p.file_name()?.to_string_lossy().into_owned();
+                    let seed: usize = name.split('-').next()?.parse().ok()?;
+                    let bytes = std::fs::read(&p).ok()?;
+                    Some((p, seed, bytes))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}

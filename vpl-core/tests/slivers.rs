@@ -1,15 +1,20 @@
 //! Long thin, huge and tiny triangles with shading normals: every hit the
-//! scene reports is finite, or the triangle was skipped at load with a
-//! counted warning. (A sliver of the Cornell box's tall block stretched to
+//! scene reports, every light sample toward it and every ray it emits is
+//! finite, or the triangle was skipped at load with a counted warning. (A sliver of the Cornell box's tall block stretched to
 //! y = 4000 once made the barycentrics NaN and `clamp` panic.)
 
 use proptest::prelude::*;
 use vpl_core::glam::Vec3;
 use vpl_core::{Light, Material, Mesh, Ray, Scene, TriangleDesc};
 
-/// One triangle with tilted shading normals, lit by a point light; `None`
-/// when the scene skips it as degenerate (and says so).
+/// One triangle with tilted shading normals, lit by a point light (or
+/// emitting itself, `emissive`); `None` when the scene skips it as
+/// degenerate (and says so).
 fn scene_of(a: Vec3, b: Vec3, c: Vec3) -> Option<Scene> {
+    scene_with(a, b, c, false)
+}
+
+fn scene_with(a: Vec3, b: Vec3, c: Vec3, emissive: bool) -> Option<Scene> {
     let ng = (b - a).cross(c - a).normalize_or_zero();
     let tilt = |v: Vec3| (ng + v).normalize_or(ng);
     let mesh = Mesh {
@@ -18,7 +23,12 @@ fn scene_of(a: Vec3, b: Vec3, c: Vec3) -> Option<Scene> {
         triangles: vec![TriangleDesc { v: [0, 1, 2], n: Some([0, 1, 2]), material: 0 }],
     };
     let light = Light::Point { position: (a + b + c) / 3.0 + Vec3::ONE, intensity: Vec3::ONE };
-    match Scene::new("sliver", &mesh, vec![Material::diffuse("grey", Vec3::splat(0.5))], vec![light], true) {
+    let (material, lights) = if emissive {
+        (Material::emissive("lamp", Vec3::splat(0.5), Vec3::ONE), vec![])
+    } else {
+        (Material::diffuse("grey", Vec3::splat(0.5)), vec![light])
+    };
+    match Scene::new("sliver", &mesh, vec![material], lights, true) {
         Ok(s) => Some(s),
         Err(e) => {
             assert!(e.to_string().contains("triangle"), "a scene of one triangle fails only for want of triangles: {e}");
@@ -43,6 +53,22 @@ fn check(a: Vec3, b: Vec3, c: Vec3, us: &[(f32, f32)]) -> Result<(), TestCaseErr
             let p = h.point;
             prop_assert!(h.t.is_finite() && p.p.is_finite(), "{a} {b} {c}: hit {p:?}");
             prop_assert!(p.n.is_normalized() && p.ng.is_normalized(), "{a} {b} {c}: normals {p:?}");
+        }
+    }
+    // The same triangle as an area light: light samples toward points above
+    // it and emitted rays are finite (or absent).
+    let Some(lamp) = scene_with(a, b, c, true) else { return Ok(()) };
+    for &(u, v) in us {
+        let q = a + (b - a) * u.min(1.0 - v) + (c - a) * v;
+        let x = q + ng * (1.0 + q.abs().max_element() * 1e-3);
+        if let Some((ls, p)) = lamp.sample_light(x, u, (u, v)) {
+            prop_assert!(
+                ls.wi.is_normalized() && ls.li.is_finite() && ls.pdf.is_finite() && ls.pdf >= 0.0 && p.is_finite(),
+                "{a} {b} {c}: {ls:?}"
+            );
+        }
+        if let Some(e) = lamp.sample_emission(u, (v, u), (u, v)) {
+            prop_assert!(e.beta.is_finite() && e.ray.o.is_finite() && e.ray.d.is_normalized(), "{a} {b} {c}: {e:?}");
         }
     }
     Ok(())

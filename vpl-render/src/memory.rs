@@ -34,8 +34,10 @@ pub fn human(bytes: u64) -> String {
         format!("{:.1} GiB", b / (1u64 << 30) as f64)
     } else if b >= (1u64 << 20) as f64 {
         format!("{:.1} MiB", b / (1u64 << 20) as f64)
-    } else {
+    } else if bytes >= 1024 {
         format!("{:.0} KiB", b / 1024.0)
+    } else {
+        format!("{bytes} B")
     }
 }
 
@@ -78,13 +80,15 @@ impl MemoryEstimate {
         Err(OverBudget { estimate, limit, largest })
     }
 
-    /// The loaded scene: triangles, their BVH (about 48 bytes a triangle
+    /// The program itself (64 MiB: code, libraries, thread stacks) and the
+    /// loaded scene: triangles, their BVH (about 48 bytes a triangle
     /// for the compressed wide nodes and the index arrays), shading normals
     /// and the light table.
     pub fn scene(scene: &Scene) -> MemoryEstimate {
         let g = &scene.geometry;
         let tris = g.triangles.len() as u64;
         let mut e = MemoryEstimate::default();
+        e.add("the program: code, libraries, thread stacks".into(), 64 << 20, &["threads"]);
         e.add(
             format!("scene: {tris} triangles × {} B + BVH", size_of::<TriangleData>() + 48),
             tris * (size_of::<TriangleData>() as u64 + 48) + g.shading_normals.len() as u64 * 36 + scene.lights.len() as u64 * 64,

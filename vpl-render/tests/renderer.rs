@@ -72,3 +72,43 @@ fn settings_are_checked_and_errors_name_the_key() {
     // Registered samplers are found by name.
     assert!(Renderer::builder(&setup.scene).registry(&Registry::builtin()).sampler("tcas").vpls(16).build().is_ok());
 }
+
+/// A sampler with one broken VPL (NaN flux): the renderer refuses the frame
+/// and names the stage, instead of returning a NaN image.
+struct BrokenSampler(vpl_core::VplSet);
+
+impl vpl_core::VplSampler for BrokenSampler {
+    fn name(&self) -> &'static str {
+        "broken"
+    }
+    fn next_frame(&mut self, _frame: &vpl_core::Frame) -> &vpl_core::VplSet {
+        self.0.begin_frame();
+        let v = vpl_core::Vpl {
+            y: vpl_core::glam::Vec3::new(0.0, 0.5, 0.0),
+            n: vpl_core::glam::Vec3::Y,
+            flux: vpl_core::glam::Vec3::new(f32::NAN, 1.0, 1.0),
+            id: 1,
+            bounce: 1,
+        };
+        self.0.set(0, Some(v));
+        &self.0
+    }
+}
+
+#[test]
+fn a_non_finite_vpl_fails_the_frame_naming_the_stage() {
+    let setup = SceneSetup::load("cornell").unwrap();
+    let camera = setup.camera.with_resolution((8, 8)).unwrap();
+    let sampler: Box<dyn vpl_core::VplSampler> = Box::new(BrokenSampler(vpl_core::VplSet::new(4)));
+    let mut r = Renderer::builder(&setup.scene)
+        .vpls(4)
+        .sampler(sampler)
+        .visibility(VisibilitySpec::RayTraced)
+        .shader(ShadingSpec::Exhaustive)
+        .mode(Mode::Indirect)
+        .build()
+        .unwrap();
+    let e = r.render(&setup.scene, &camera, 0, 0.0).unwrap_err();
+    assert!(matches!(e, RenderError::NonFinite { stage: "the VPL sampler", count: 1, frame: 0 }), "{e}");
+    assert!(e.to_string().contains("the VPL sampler produced 1 non-finite value"), "{e}");
+}

@@ -229,6 +229,7 @@ fn colour(keyword: &str, rest: &str, max: f32, why_max: &str) -> std::result::Re
         return Err(format!("{keyword} must not be negative, got '{rest}'"));
     }
     if v.max_element() > max {
+        let max = if max >= 1e7 { format!("{max:e}") } else { format!("{max}") };
         return Err(format!("{keyword} '{rest}' is above {max}: {why_max}"));
     }
     Ok(v)

@@ -27,8 +27,13 @@ fn bad(what: impl Into<String>, reason: String) -> CoreError {
     CoreError::BadValue { what: what.into(), reason }
 }
 
+/// A number as people write it: 3e38 rather than 39 digits.
+fn num(v: f32) -> String {
+    if v.is_finite() && v != 0.0 && (v.abs() >= 1e7 || v.abs() < 1e-4) { format!("{v:e}") } else { format!("{v}") }
+}
+
 fn show(v: Vec3) -> String {
-    format!("{} {} {}", v.x, v.y, v.z)
+    format!("{} {} {}", num(v.x), num(v.y), num(v.z))
 }
 
 /// A colour in [0, `max`] per channel.
@@ -40,7 +45,7 @@ pub fn colour(v: Vec3, max: f32, what: &str) -> Result<()> {
         return Err(bad(what, format!("{} is negative", show(v))));
     }
     if v.max_element() > max {
-        return Err(bad(what, format!("{} is above {max}", show(v))));
+        return Err(bad(what, format!("{} is above {}", show(v), num(max))));
     }
     Ok(())
 }
@@ -51,7 +56,7 @@ pub fn position(p: Vec3, what: &str) -> Result<()> {
         return Err(bad(what, format!("{} is not finite", show(p))));
     }
     if p.abs().max_element() > MAX_COORDINATE {
-        return Err(bad(what, format!("{} lies beyond ±{MAX_COORDINATE}", show(p))));
+        return Err(bad(what, format!("{} lies beyond ±{}", show(p), num(MAX_COORDINATE))));
     }
     Ok(())
 }

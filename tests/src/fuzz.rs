@@ -497,6 +497,14 @@ pub struct Finding {
     pub input: Vec<u8>,
 }
 
+/// The input of execution `i` of a run of `target` with `seed`: the index of
+/// the seed it mutates and the mutated bytes.
+pub fn input(target: Target, seeds: &[Seed], seed: u64, i: u64) -> (usize, Vec<u8>) {
+    let mut rng = stream(seed, target as u64, Purpose::TEST, i);
+    let k = rng.below(seeds.len() as u32) as usize;
+    (k, mutate(&seeds[k].files[0].1, target, &mut rng))
+}
+
 /// Runs executions `first..` of `target` with `seed` until `stop(done)` says
 /// so, in the scratch folder `dir`.
 pub fn run(target: Target, seed: u64, first: u64, dir: &Path, mut stop: impl FnMut(u64) -> bool) -> Report {
@@ -505,9 +513,7 @@ pub fn run(target: Target, seed: u64, first: u64, dir: &Path, mut stop: impl FnM
     std::fs::create_dir_all(dir).expect("fuzz scratch folder");
     let mut i = first;
     while !stop(report.executions) {
-        let mut rng = stream(seed, target as u64, Purpose::TEST, i);
-        let k = rng.below(seeds.len() as u32) as usize;
-        let input = mutate(&seeds[k].files[0].1, target, &mut rng);
+        let (k, input) = input(target, &seeds, seed, i);
         match run_one(target, &seeds[k], &input, dir, i) {
             Outcome::Accepted => report.accepted += 1,
             Outcome::Refused(_) => report.refused += 1,

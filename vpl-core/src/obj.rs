@@ -59,6 +59,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
 /// library's path and text, `None` when it does not exist.
 pub fn parse_obj(bytes: &[u8], path: &Path, library: impl Fn(&str) -> Result<Option<(PathBuf, String)>>) -> Result<ObjData> {
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
+    check_indices(bytes, path)?;
     let mut warnings = Vec::new();
     // The libraries are parsed here, not by tobj: tobj only learns each
     // material's index (its own material list stays empty).
@@ -160,6 +161,41 @@ impl Libraries {
     }
 }
 
+/// Checks the indices of face, line and point statements before tobj sees
+/// them: an index 0 or a relative (negative) index that reaches before the
+/// first element of its kind is an error naming the line (tobj 4.0.5 turns
+/// it into an index near 2⁶⁴ and overflows).
+fn check_indices(bytes: &[u8], path: &Path) -> Result<()> {
+    let mut counts = [0i64; 3];
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let Ok(line) = std::str::from_utf8(line) else { continue };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f" | "l" | "p") => {
+                for word in words {
+                    for (k, part) in word.split('/').take(3).enumerate() {
+                        let Ok(x) = part.parse::<i64>() else { continue };
+                        let kind = ["vertex", "texture coordinate", "normal"][k];
+                        let reason = if x == 0 {
+                            format!("{kind} index 0 in '{word}': OBJ indices start at 1")
+                        } else if x < 0 && x.unsigned_abs() > counts[k] as u64 {
+                            format!("relative {kind} index {x} in '{word}' reaches before the first {kind} ({} defined so far)", counts[k])
+                        } else {
+                            continue;
+                        };
+                        return Err(CoreError::Obj { path: path.into(), reason: format!("line {}: {reason}", i + 1) });
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Warnings for `usemtl` names that no library defines (their faces get the
 /// default material), one per name with the first line that uses it.
 fn unknown_usemtl(bytes: &[u8], path: &Path, index: &BTreeMap<String, usize>) -> Vec<String> {
@@ -247,6 +283,21 @@ mod tests {
         let obj = format!("mtllib s.obj\n{QUAD}");
         let e = parse_obj(obj.as_bytes(), Path::new("s.obj"), |_| Ok(Some((PathBuf::from("s.obj"), obj.clone())))).unwrap_err();
         assert!(e.to_string().contains("no material library"), "{e}");
+    }
+
+    #[test]
+    fn indices_before_the_first_vertex_are_errors_naming_the_line() {
+        let quad = |f: &str| format!("v 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\n{f}\n");
+        for (f, needle) in [
+            ("f 1 2 -2147483648", "line 5: relative vertex index -2147483648"),
+            ("f 1//-2 2//1 3//1", "relative normal index -2"),
+            ("f 0 1 2", "vertex index 0"),
+            ("l 1 -4", "relative vertex index -4"),
+        ] {
+            let e = parse_obj(quad(f).as_bytes(), Path::new("s.obj"), |_| Ok(None)).unwrap_err().to_string();
+            assert!(e.contains(needle) && e.contains("s.obj"), "{f}: {e}");
+        }
+        assert!(parse_obj(quad("f -3 -2 -1").as_bytes(), Path::new("s.obj"), |_| Ok(None)).is_ok());
     }
 
     #[test]

@@ -17,7 +17,8 @@
 //! - `cargo xtask bench-gpu`: milliseconds per GPU kernel and per indirect frame at 1920×1080,
 //!   2048 SMC VPLs, `office` and `atrium`, and the adapter they ran on.
 //! - `cargo xtask fuzz [--seconds N] [--target obj|mtl|toml|exr|all] [--seed S]`: the loader
-//!   fuzz targets (`tests/src/fuzz.rs`) for N seconds (default 600) in release mode; prints the
+//!   fuzz targets (`tests/src/fuzz.rs`) for N seconds (default 600) in the `fuzz` profile (release
+//!   speed with debug assertions and overflow checks); prints the
 //!   executions and findings, writes findings to `target/fuzz-findings/`.
 
 use std::path::{Path, PathBuf};
@@ -96,7 +97,7 @@ fn test(args: &[String]) -> Result<(), String> {
 
 fn fuzz(args: &[String]) -> Result<(), String> {
     let mut c = cargo();
-    c.args(["run", "--release", "--quiet", "-p", "vpl-tests", "--bin", "vpl-fuzz", "--"]);
+    c.args(["run", "--profile", "fuzz", "--quiet", "-p", "vpl-tests", "--bin", "vpl-fuzz", "--"]);
     if !args.iter().any(|a| a == "--seconds") {
         c.args(["--seconds", "600"]);
     }

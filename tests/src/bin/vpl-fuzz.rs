@@ -2,13 +2,16 @@
 //! executions and what they found (`cargo xtask fuzz` runs it).
 //!
 //! ```text
-//! vpl-fuzz [--target obj|mtl|toml|exr|all] [--seconds N] [--seed S] [--first I] [--findings DIR]
+//! vpl-fuzz [--target obj|mtl|toml|exr|all] [--seconds N] [--executions N] [--seed S] [--first I]
+//!          [--findings DIR] [--inputs DIR]
 //! ```
 //!
 //! The time is shared equally by the targets. Findings are written to
 //! `DIR/<target>/<seed>-<execution>` (default `target/fuzz-findings`), ready
-//! to be moved into `tests/data/fuzz-regressions/`. Exit 1 when something
-//! was found.
+//! to be moved into `tests/data/fuzz-regressions/`. `--executions N` stops
+//! after N executions per target; `--inputs DIR` writes every input it makes
+//! (to reproduce execution I of seed S: `--seed S --first I --executions 1
+//! --inputs DIR`). Exit 1 when something was found.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -19,6 +22,8 @@ fn main() {
     let mut seconds = 60.0f64;
     let mut seed = 1u64;
     let mut first = 0u64;
+    let mut executions = u64::MAX;
+    let mut inputs: Option<PathBuf> = None;
     let mut findings_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/fuzz-findings");
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -37,6 +42,8 @@ fn main() {
             "--seed" => seed = value.parse().unwrap_or_else(|_| fail("--seed".into())),
             "--first" => first = value.parse().unwrap_or_else(|_| fail("--first".into())),
             "--findings" => findings_dir = PathBuf::from(value),
+            "--executions" => executions = value.parse().unwrap_or_else(|_| fail("--executions".into())),
+            "--inputs" => inputs = Some(PathBuf::from(value)),
             a => fail(format!("unknown argument '{a}'")),
         }
         i += 2;
@@ -48,7 +55,15 @@ fn main() {
     let mut found = 0usize;
     for t in targets {
         let start = Instant::now();
-        let report = fuzz::run(t, seed, first, &scratch.join(t.name()), |_| start.elapsed() >= share);
+        if let Some(dir) = &inputs {
+            let seeds = fuzz::seeds(t);
+            let _ = std::fs::create_dir_all(dir.join(t.name()));
+            for i in first..first.saturating_add(executions.min(10_000)) {
+                let (k, input) = fuzz::input(t, &seeds, seed, i);
+                let _ = std::fs::write(dir.join(t.name()).join(format!("{k}-{i}")), input);
+            }
+        }
+        let report = fuzz::run(t, seed, first, &scratch.join(t.name()), |done| done >= executions || start.elapsed() >= share);
         let secs = start.elapsed().as_secs_f64();
         println!(
             "{}: {} executions in {secs:.0} s ({:.0}/s): {} accepted, {} refused with one line, {} findings",

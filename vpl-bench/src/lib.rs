@@ -33,6 +33,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod cpu_time;
 pub mod error;
 pub mod figures;
 pub mod georgiev;

@@ -59,7 +59,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
 /// library's path and text, `None` when it does not exist.
 pub fn parse_obj(bytes: &[u8], path: &Path, library: impl Fn(&str) -> Result<Option<(PathBuf, String)>>) -> Result<ObjData> {
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
-    check_indices(bytes, path)?;
+    let usemtl = prescan(bytes, path)?;
     let mut warnings = Vec::new();
     // The libraries are parsed here, not by tobj: tobj only learns each
     // material's index (its own material list stays empty).
@@ -84,7 +84,7 @@ pub fn parse_obj(bytes: &[u8], path: &Path, library: impl Fn(&str) -> Result<Opt
         mat.layered = layered_from_mtl(m.ks, m.ns, m.dissolve, m.ni, m.illum);
         materials.push(mat);
     }
-    warnings.extend(unknown_usemtl(bytes, path, &libs.index));
+    warnings.extend(unknown_usemtl(&usemtl, path, &libs.index));
     let mut default_index: Option<u32> = None;
     let mut mesh = Mesh::default();
     for model in &models {
@@ -161,12 +161,15 @@ impl Libraries {
     }
 }
 
-/// Checks the indices of face, line and point statements before tobj sees
-/// them: an index 0 or a relative (negative) index that reaches before the
-/// first element of its kind is an error naming the line (tobj 4.0.5 turns
-/// it into an index near 2⁶⁴ and overflows).
-fn check_indices(bytes: &[u8], path: &Path) -> Result<()> {
+/// One pass over the OBJ before tobj sees it. Checks the indices of face,
+/// line and point statements: an index 0 or a relative (negative) index that
+/// reaches before the first element of its kind is an error naming the line
+/// (tobj 4.0.5 turns it into an index near 2⁶⁴ and overflows). Returns the
+/// `usemtl` names with the first line that uses each, for
+/// [`unknown_usemtl`].
+fn prescan(bytes: &[u8], path: &Path) -> Result<BTreeMap<String, usize>> {
     let mut counts = [0i64; 3];
+    let mut usemtl = BTreeMap::new();
     for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
         let Ok(line) = std::str::from_utf8(line) else { continue };
         let mut words = line.split_whitespace();
@@ -174,6 +177,12 @@ fn check_indices(bytes: &[u8], path: &Path) -> Result<()> {
             Some("v") => counts[0] += 1,
             Some("vt") => counts[1] += 1,
             Some("vn") => counts[2] += 1,
+            Some("usemtl") => {
+                let name = line.trim().strip_prefix("usemtl").unwrap_or_default().trim();
+                if !name.is_empty() {
+                    usemtl.entry(name.to_string()).or_insert(i + 1);
+                }
+            }
             Some("f" | "l" | "p") => {
                 for word in words {
                     for (k, part) in word.split('/').take(3).enumerate() {
@@ -193,24 +202,15 @@ fn check_indices(bytes: &[u8], path: &Path) -> Result<()> {
             _ => {}
         }
     }
-    Ok(())
+    Ok(usemtl)
 }
 
-/// Warnings for `usemtl` names that no library defines (their faces get the
-/// default material), one per name with the first line that uses it.
-fn unknown_usemtl(bytes: &[u8], path: &Path, index: &BTreeMap<String, usize>) -> Vec<String> {
-    let mut seen = BTreeMap::new();
-    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
-        let Ok(line) = std::str::from_utf8(line) else { continue };
-        let line = line.trim();
-        if let Some(rest) = line.strip_prefix("usemtl") {
-            let name = rest.trim();
-            if rest.starts_with(char::is_whitespace) && !name.is_empty() && !index.contains_key(name) {
-                seen.entry(name.to_string()).or_insert(i + 1);
-            }
-        }
-    }
-    seen.into_iter()
+/// Warnings for `usemtl` names (with the first line that uses each, from
+/// [`prescan`]) that no library defines: their faces get the default material.
+fn unknown_usemtl(usemtl: &BTreeMap<String, usize>, path: &Path, index: &BTreeMap<String, usize>) -> Vec<String> {
+    usemtl
+        .iter()
+        .filter(|(name, _)| !index.contains_key(name.as_str()))
         .map(|(name, line)| {
             format!(
                 "{}:{line}: usemtl '{name}' names no material of the loaded libraries; its faces get the default material",

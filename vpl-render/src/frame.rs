@@ -77,6 +77,13 @@ pub fn count_non_finite(img: &Image) -> usize {
     img.data.iter().filter(|p| !p.is_finite()).count()
 }
 
+/// Records `bad` non-finite values of `stage` unless an earlier stage already had some.
+fn note(first: &mut Option<(&'static str, usize)>, stage: &'static str, bad: usize) {
+    if bad > 0 && first.is_none() {
+        *first = Some((stage, bad));
+    }
+}
+
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
@@ -134,27 +141,19 @@ pub fn render_frame_on(
         moved = vpls.moved_count();
         stored = vpls.stored();
         let bad = vpls.iter().filter(|(_, v)| !(v.flux.is_finite() && v.y.is_finite() && v.n.is_finite())).count();
-        if bad > 0 {
-            non_finite = Some(("the VPL sampler", bad));
-        }
+        note(&mut non_finite, "the VPL sampler", bad);
         let t0 = Instant::now();
         visibility = vis.update(scene, vpls);
         t.visibility_ms = ms(t0);
         let t0 = Instant::now();
         image = shader.shade(&gbuffer, vpls, vis);
         t.shading_ms = ms(t0);
-        let bad = count_non_finite(&image);
-        if bad > 0 && non_finite.is_none() {
-            non_finite = Some(("indirect shading", bad));
-        }
+        note(&mut non_finite, "indirect shading", count_non_finite(&image));
         sampler_stats = sampler.stats();
         indirect = Some(image.clone());
     }
     if s.mode.includes(0, s.max_depth) {
-        let bad = gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count();
-        if bad > 0 && non_finite.is_none() {
-            non_finite = Some(("the G-buffer's emission", bad));
-        }
+        note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
         for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
             *o += g.emitted;
         }
@@ -163,18 +162,12 @@ pub fn render_frame_on(
         let t0 = Instant::now();
         let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
         t.direct_ms = ms(t0);
-        let bad = count_non_finite(&d);
-        if bad > 0 && non_finite.is_none() {
-            non_finite = Some(("direct light", bad));
-        }
+        note(&mut non_finite, "direct light", count_non_finite(&d));
         for (o, d) in image.data.iter_mut().zip(&d.data) {
             *o += *d;
         }
     }
     t.total_ms = ms(start) + gbuffer_ms;
-    let bad = count_non_finite(&image);
-    if bad > 0 && non_finite.is_none() {
-        non_finite = Some(("the frame's sum", bad));
-    }
+    note(&mut non_finite, "the frame's sum", count_non_finite(&image));
     FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite }
 }

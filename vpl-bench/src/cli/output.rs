@@ -70,11 +70,11 @@ pub(super) fn distinct(outputs: &[(&str, &Path)]) -> Res<()> {
 
 /// Fails when `img` holds NaN or infinite pixels, naming `stage` and the first one.
 pub(super) fn check_finite(img: &Image, stage: &str) -> Res<()> {
-    let bad = img.data.iter().filter(|p| !p.is_finite()).count();
     match img.data.iter().position(|p| !p.is_finite()) {
         None => Ok(()),
         Some(i) => {
             let w = img.width.max(1) as usize;
+            let bad = vpl_render::count_non_finite(img);
             Err(format!("{stage} produced {bad} non-finite pixel(s) (first at {}, {}); nothing written", i % w, i / w))
         }
     }

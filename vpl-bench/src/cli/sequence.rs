@@ -53,7 +53,9 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if out.exists() && !out.is_dir() {
         return Err(format!("--out {} is not a directory", out.display()));
     }
-    check_writable(&out.join("frames.csv")).or_else(|e| if out.exists() { Err(e) } else { Ok(()) })?;
+    if out.is_dir() {
+        check_writable(&out.join("frames.csv"))?;
+    }
     let pool = pool(threads)?;
     let setup = SceneSetup::load(&scene).map_err(|e| e.to_string())?;
     for w in &setup.warnings {

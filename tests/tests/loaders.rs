@@ -196,3 +196,27 @@ fn sequences_move_camera_and_lights() {
     assert!(std::sync::Arc::ptr_eq(&a.geometry, &b.geometry), "frames share the BVH");
     assert_ne!(ca.target, cb.target);
 }
+
+/// The committed scene files on real geometry load, animate and light
+/// their first and last frames, when the models are where the files name
+/// them (`../shared/scenes`); otherwise the test says it skipped.
+#[test]
+fn real_scene_files_load_when_their_models_are_present() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    for (file, triangles) in [("sponza-dabrovic.toml", 60_000), ("city-munich.toml", 30_000)] {
+        let path = root.join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap().trim_matches('"');
+        if !root.join(obj).is_file() {
+            eprintln!("skipped {file}: {obj} is not there");
+            continue;
+        }
+        let setup = SceneSetup::load(path.to_str().unwrap()).unwrap();
+        assert!(setup.scene.geometry.triangles.len() > triangles, "{file}");
+        let seq = setup.sequence.as_ref().expect("an animation");
+        let last = seq.frame_count() - 1;
+        let (first, _) = setup.frame(0).unwrap();
+        let (end, _) = setup.frame(last).unwrap();
+        assert_ne!(format!("{:?}", first.lights), format!("{:?}", end.lights), "{file}: the light does not move");
+    }
+}

@@ -105,6 +105,22 @@ impl KnnDensity {
         Ok(qs.par_iter().map(|q| density(k, n, self.kth(&q.to_array(), kk))).collect())
     }
 
+    /// The nearest point of the set to each query: its index (in the order
+    /// the points were given) and squared distance, in parallel. An empty
+    /// set gives [`DensityError::TooFewPoints`].
+    pub fn nearest_many(&self, qs: &[Vec3]) -> Result<Vec<(usize, f32)>, DensityError> {
+        let Some(tree) = self.tree.as_ref() else {
+            return Err(DensityError::TooFewPoints { needed: 1, points: 0 });
+        };
+        Ok(qs
+            .par_iter()
+            .map(|q| {
+                let n = tree.query(&q.to_array()).nearest_one::<SquaredEuclidean<f32>>().execute();
+                (n.item as usize, n.distance)
+            })
+            .collect())
+    }
+
     /// Squared distance from every point of the set to its `k`-th nearest
     /// *other* point (the point itself is not its own neighbour), in the
     /// order the points were given. A set of at most `k` points gives
@@ -115,6 +131,101 @@ impl KnnDensity {
             return vec![f32::INFINITY; n];
         };
         self.points.par_iter().map(|q| self.kth(q, kk)).collect()
+    }
+
+    /// The nearest point of the set to `q` that `accept` takes (by index),
+    /// other than `skip`, as (index, squared distance): the 2 nearest are
+    /// looked at first, then the 16, 64 and 512 nearest; `None` when none
+    /// of those is accepted.
+    pub fn nearest_accepted(&self, q: Vec3, skip: Option<usize>, accept: impl Fn(usize) -> bool) -> Option<(usize, f32)> {
+        self.nearest_accepted_n(q, skip, accept, 1).into_iter().next()
+    }
+
+    /// Up to `m` nearest points of the set to `q` that `accept` takes,
+    /// other than `skip`, nearest first, among its 512 nearest (looked at
+    /// in rounds of 2m, 16m, 64m and 512).
+    pub fn nearest_accepted_n(&self, q: Vec3, skip: Option<usize>, accept: impl Fn(usize) -> bool, m: usize) -> Vec<(usize, f32)> {
+        let mut out = Vec::new();
+        let Some(tree) = self.tree.as_ref().filter(|_| m > 0) else { return out };
+        let q = q.to_array();
+        if m == 1 && skip.is_none() {
+            // The common case first: the nearest point is accepted.
+            let n = tree.query(&q).nearest_one::<SquaredEuclidean<f32>>().execute();
+            if accept(n.item as usize) {
+                out.push((n.item as usize, n.distance));
+                return out;
+            }
+        }
+        let mut seen = 0;
+        for k in [(2 * m).max(2), 16 * m, 64 * m, 512] {
+            let k = k.max(seen + 1).min(self.points.len());
+            let Some(kk) = NonZero::new(k) else { break };
+            let found = tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(kk).execute();
+            for f in found.iter().skip(seen) {
+                let j = f.item as usize;
+                if Some(j) != skip && accept(j) {
+                    out.push((j, f.distance));
+                    if out.len() == m {
+                        return out;
+                    }
+                }
+            }
+            if k == self.points.len() {
+                break;
+            }
+            seen = k;
+        }
+        out
+    }
+
+    /// Every point of the set within squared distance `r2` of `q`, as
+    /// (index, squared distance), in no particular order.
+    pub fn within(&self, q: Vec3, r2: f32) -> Vec<(usize, f32)> {
+        let Some(tree) = self.tree.as_ref().filter(|_| r2 >= 0.0) else { return Vec::new() };
+        tree.query(&q.to_array()).within::<SquaredEuclidean<f32>>(r2).execute().iter().map(|f| (f.item as usize, f.distance)).collect()
+    }
+
+    /// The nearest *other* point of every point of the set, as (index,
+    /// squared distance), in the order the points were given; `None` for a
+    /// set of one point.
+    pub fn member_nearest(&self) -> Vec<Option<(usize, f32)>> {
+        let n = self.points.len();
+        let (Some(tree), Some(two)) = (self.tree.as_ref(), NonZero::new(2).filter(|_| n >= 2)) else {
+            return vec![None; n];
+        };
+        self.points
+            .par_iter()
+            .enumerate()
+            .map(|(i, q)| {
+                tree.query(q)
+                    .nearest_n::<SquaredEuclidean<f32>>(two)
+                    .execute()
+                    .iter()
+                    .map(|f| (f.item as usize, f.distance))
+                    .find(|(j, _)| *j != i)
+            })
+            .collect()
+    }
+
+    /// The `k` nearest *other* points of every point of the set, nearest
+    /// first, as (index, squared distance), in the order the points were
+    /// given; a point with fewer than `k` others gets what there is.
+    pub fn member_neighbours(&self, k: usize) -> Vec<Vec<(usize, f32)>> {
+        let n = self.points.len();
+        let Some(kk) = NonZero::new((k + 1).min(n)) else {
+            return vec![Vec::new(); n];
+        };
+        let tree = self.tree.as_ref().expect("a non-empty set has a tree");
+        self.points
+            .par_iter()
+            .enumerate()
+            .map(|(i, q)| {
+                let found = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(kk).execute();
+                let mut out: Vec<(usize, f32)> = found.iter().map(|f| (f.item as usize, f.distance)).filter(|(j, _)| *j != i).collect();
+                out.truncate(k);
+                out
+            })
+            .collect()
     }
 
     /// Density at every point of the set from its `k` nearest other points,
@@ -180,6 +291,17 @@ mod tests {
         let p = d.members(1);
         assert!((p[2] - 1.0 / (5.0 * PI)).abs() < 1e-7);
         assert!(d.member_radii_sq(5).iter().all(|r| r.is_infinite()));
+        assert_eq!(d.member_neighbours(2)[0], vec![(1, 1.0), (2, 4.0)]);
+        assert_eq!(d.member_nearest()[4], Some((3, 1.0)));
+        assert_eq!(KnnDensity::new(&[Vec3::ZERO]).unwrap().member_nearest(), vec![None]);
+        let mut w = d.within(Vec3::new(2.0, 0.0, 0.0), 1.0);
+        w.sort_by_key(|x| x.0);
+        assert_eq!(w, vec![(1, 1.0), (2, 0.0), (3, 1.0)]);
+        assert_eq!(d.nearest_accepted(Vec3::ZERO, Some(0), |j| j % 2 == 0), Some((2, 4.0)));
+        assert_eq!(d.nearest_accepted(Vec3::ZERO, None, |j| j > 9), None);
+        assert_eq!(d.nearest_accepted_n(Vec3::ZERO, None, |j| j != 1, 3), vec![(0, 0.0), (2, 4.0), (3, 9.0)]);
+        assert_eq!(d.member_neighbours(9)[4].len(), 4);
+        assert_eq!(d.nearest_many(&[Vec3::new(2.75, 0.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]).unwrap(), vec![(3, 0.0625), (0, 1.0)]);
         assert_eq!(d.members(5), vec![0.0; 5]);
     }
 
@@ -192,5 +314,6 @@ mod tests {
         let e = KnnDensity::new(&[]).unwrap();
         assert!(e.is_empty() && e.at(Vec3::ONE, 1).is_err() && e.at_many(&[Vec3::ONE], 1).is_err());
         assert!(e.members(1).is_empty());
+        assert_eq!(e.nearest_many(&[Vec3::ONE]).unwrap_err(), DensityError::TooFewPoints { needed: 1, points: 0 });
     }
 }

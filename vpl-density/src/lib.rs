@@ -18,6 +18,11 @@
 //!   well sampled and are rarely chosen).
 //! - [`KnnDensity::members`]: the density at each of the set's own points,
 //!   the point itself excluded from its neighbours.
+//! - Neighbour queries for other estimators: [`KnnDensity::nearest_many`],
+//!   [`KnnDensity::member_nearest`], [`KnnDensity::member_neighbours`],
+//!   [`KnnDensity::within`] and [`KnnDensity::nearest_accepted`] (the
+//!   nearest point a predicate takes, e.g. one facing the same way), which
+//!   SMC's Voronoi-cell flux uses.
 //! - [`rendering_k`]: `k = max(1, ⌊√(I/32)⌋)` for the densities that weight
 //!   rendered VPLs (eq. 8): k → ∞ and k/I → 0 as I grows, which makes the
 //!   estimate consistent; k = 8 at I = 2048.

@@ -58,6 +58,13 @@ impl MemoryEstimate {
         self.items.push(MemoryItem { what, bytes, driver });
     }
 
+    /// The estimate with one more part: what it is, its bytes, and the
+    /// flags that drive it (named when it is the largest part).
+    pub fn with_part(mut self, what: String, bytes: u64, driver: &'static [&'static str]) -> Self {
+        self.add(what, bytes, driver);
+        self.sorted()
+    }
+
     /// The total in bytes.
     pub fn total(&self) -> u64 {
         self.items.iter().map(|i| i.bytes).fold(0u64, u64::saturating_add)

@@ -6,7 +6,7 @@ use vpl_core::{ParamError, Params, VplSampler};
 use vpl_ir::{InstantRadiosity, IrConfig};
 use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
 use vpl_rr::{LightPaths, RrConfig, RrSampler, SamplerCandidates};
-use vpl_smc::{SmcConfig, SmcSampler};
+use vpl_smc::{FluxEstimator, SmcConfig, SmcSampler};
 use vpl_tcas::{TcasConfig, TcasSampler};
 
 /// A parameter error of sampler `name`.
@@ -66,10 +66,20 @@ fn tcas(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, Sampling
 }
 
 fn smc(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
-    cx.needs_vpls("smc")?;
-    cx.needs_indirect("smc")?;
-    let config = SmcConfig::from_params(&cx.budget, p).map_err(param("smc"))?;
-    SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler("smc", e))
+    smc_with(cx, p, "smc", FluxEstimator::default())
+}
+
+/// SMC with the paper's kNN flux (eq. 5 and 7) unless `flux` says otherwise.
+fn smc_knn(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
+    smc_with(cx, p, "smc-knn", FluxEstimator::Knn)
+}
+
+fn smc_with(cx: &SamplerContext, p: &Params, name: &str, flux: FluxEstimator) -> Result<Box<dyn VplSampler>, SamplingError> {
+    cx.needs_vpls(name)?;
+    cx.needs_indirect(name)?;
+    let mut config = SmcConfig::from_params(&cx.budget, p).map_err(param(name))?;
+    config.flux = p.get_or("flux", flux).map_err(param(name))?;
+    SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
 }
 
 /// The built-in entries, in the order the toolkit lists them.
@@ -116,6 +126,8 @@ pub(crate) fn entries() -> Vec<SamplerEntry> {
             smc,
         )
         .with_keys(SmcConfig::KEYS),
+        SamplerEntry::new("smc-knn", "SMC with the paper's flux: radiance over the kNN density of the VPLs (eq. 5 and 7)", smc_knn)
+            .with_keys(SmcConfig::KEYS),
     ]
 }
 

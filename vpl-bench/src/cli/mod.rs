@@ -227,7 +227,7 @@ struct ProgressiveArgs {
 /// sampler does not read is an error.
 #[derive(clap::Args)]
 struct VplArgs {
-    /// VPL sampler: a registry name (ir, rr, mir, mir-resample, tcas, smc, or one registered by the program).
+    /// VPL sampler: a registry name (ir, rr, mir, mir-resample, tcas, smc, smc-knn, or one registered by the program).
     #[arg(long, default_value = "ir")]
     sampler: String,
     /// A sampler parameter KEY=VALUE (repeat for more): any key the sampler reads.
@@ -577,6 +577,28 @@ fn pipeline_spec(
         seed,
         backend: v.backend.backend(),
     })
+}
+
+/// `estimate` with the sampler's own working memory where it is large:
+/// SMC's area probes.
+fn with_sampler_memory(estimate: vpl_render::MemoryEstimate, spec: &crate::pipeline::PipelineSpec) -> vpl_render::MemoryEstimate {
+    use vpl_sampling::{FluxEstimator, SmcConfig};
+    if spec.sampler != "smc" && spec.sampler != "smc-knn" {
+        return estimate;
+    }
+    let params = spec.params.clone();
+    let Ok(mut c) = SmcConfig::from_params(&spec.budget, &params) else { return estimate };
+    if spec.sampler == "smc-knn" && params.get::<FluxEstimator>("flux").ok().flatten().is_none() {
+        c.flux = FluxEstimator::Knn;
+    }
+    match c.probe_memory() {
+        0 => estimate,
+        bytes => estimate.with_part(
+            format!("SMC area probes: {} VPLs × {} hits × {} iterations", c.vpls, c.resample_ratio, c.probe_iterations),
+            bytes,
+            &["vpls", "resample-ratio"],
+        ),
+    }
 }
 
 /// The sampler parameters the command line gives: each sampler flag that

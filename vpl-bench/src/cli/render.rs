@@ -172,10 +172,11 @@ fn render_vpl(
 ) -> Res<()> {
     let (sc, camera) = load_frame(scene, frame, size)?;
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    let estimate = vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps);
-    check_memory(&estimate, memory_limit)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
-    let mut p = build_renderer(&pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?, registry, &sc)?;
+    let spec = pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?;
+    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec);
+    check_memory(&estimate, memory_limit)?;
+    let mut p = build_renderer(&spec, registry, &sc)?;
     p.backend().check_size(camera.resolution).map_err(crate::pipeline::backend_line)?;
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");

@@ -69,10 +69,11 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         None => setup.camera.resolution,
     };
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    let estimate = vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps);
-    check_memory(&estimate, memory_limit)?;
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
-    let mut p = build_renderer(&pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?, registry, &setup.scene)?;
+    let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?;
+    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);
+    check_memory(&estimate, memory_limit)?;
+    let mut p = build_renderer(&spec, registry, &setup.scene)?;
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }

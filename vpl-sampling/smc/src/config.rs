@@ -1,5 +1,6 @@
 //! Settings of the SMC sampler, with the paper's defaults.
 
+use crate::flux::{AreaProbes, FluxEstimator, flux_param};
 use vpl_core::{Budget, ParamError, ParamKey, Params};
 use vpl_density::rendering_k;
 
@@ -34,6 +35,10 @@ pub struct SmcConfig {
     /// Candidates stronger than this quantile of the VPL intensities are
     /// counted as M_strong (eq. 9).
     pub strong_quantile: f32,
+    /// The area each VPL stands for in its flux ([`FluxEstimator`]).
+    pub flux: FluxEstimator,
+    /// T: iterations of candidate-ray hits that measure the Voronoi cells.
+    pub probe_iterations: usize,
 }
 
 impl Default for SmcConfig {
@@ -50,6 +55,8 @@ impl Default for SmcConfig {
             visibility_rays: 16,
             visibility_iterations: 2,
             strong_quantile: 0.95,
+            flux: FluxEstimator::default(),
+            probe_iterations: 16,
         }
     }
 }
@@ -58,6 +65,19 @@ impl SmcConfig {
     /// The k of rendered VPLs' densities: the configured one or eq. (8).
     pub fn k(&self) -> usize {
         self.knn_k.unwrap_or_else(|| rendering_k(self.vpls))
+    }
+
+    /// Bytes the sampler keeps beyond its VPLs: the area probes of the
+    /// Voronoi-cell fluxes, T iterations of I × resample-ratio hits (none
+    /// for the kNN flux).
+    pub fn probe_memory(&self) -> u64 {
+        if !self.flux.probes() {
+            return 0;
+        }
+        (self.vpls as u64)
+            .saturating_mul(self.resample_ratio as u64)
+            .saturating_mul(self.probe_iterations as u64)
+            .saturating_mul(AreaProbes::BYTES_PER_PROBE)
     }
 
     /// Checks the settings.
@@ -76,6 +96,9 @@ impl SmcConfig {
         }
         if !(self.strong_quantile > 0.0 && self.strong_quantile <= 1.0) {
             return Err(SmcError::Invalid("the strong quantile must be in (0, 1]"));
+        }
+        if self.probe_iterations == 0 {
+            return Err(SmcError::Invalid("the area probes need at least 1 iteration"));
         }
         if self.vpls.checked_mul(self.resample_ratio).is_none_or(|n| n > 1 << 28) {
             return Err(SmcError::Invalid("I times the resample ratio must be at most 2^28"));
@@ -108,6 +131,12 @@ impl SmcConfig {
             default: "0.95",
             about: "quantile of the VPL intensities above which a candidate is strong (eq. 9)",
         },
+        ParamKey {
+            key: "flux",
+            default: "voronoi",
+            about: "area per VPL in its flux: voronoi (cells measured by candidate hits), knn (the paper's eq. 7) or knn-calibrated",
+        },
+        ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
     ];
 
     /// The settings of `budget` (I and the radiosity paths' bounces,
@@ -135,6 +164,8 @@ impl SmcConfig {
             visibility_rays: p.get_or("visibility-rays", d.visibility_rays)?,
             visibility_iterations: p.get_or("visibility-iterations", d.visibility_iterations)?,
             strong_quantile,
+            flux: flux_param(p)?,
+            probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
         })
     }
 }

@@ -1,6 +1,7 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
+use crate::flux::{AreaProbes, FluxEstimator, Site};
 use crate::points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, resolve};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -103,6 +104,12 @@ pub struct SmcStats {
     pub relit: bool,
     /// Coefficient of variation (σ/μ) of the intensities I(y) of the set.
     pub intensity_cv: f32,
+    /// Σ of the paper's kNN areas π r_k² / k over Σ of the Voronoi cells'
+    /// areas (0 when the cells were not measured): how much more surface
+    /// the paper's estimator gives the set.
+    pub knn_area_ratio: f32,
+    /// Shadow rays that gave probes their cells.
+    pub probe_rays: usize,
 }
 
 /// The Sequential Monte Carlo Instant Radiosity sampler (Algorithm 1).
@@ -115,6 +122,12 @@ pub struct SmcSampler {
     next_id: u64,
     iterations: u64,
     lighting: Option<LightingKey>,
+    probes: AreaProbes,
+    /// Inside the warm-up: the flux is not looked at, so the cells are not measured.
+    warming: bool,
+    /// Whether this iteration's hits become area probes (all but the
+    /// warm-up's early iterations, whose probes would expire unused).
+    collect_probes: bool,
     stats: SmcStats,
     timings: SmcTimings,
 }
@@ -171,6 +184,9 @@ impl SmcSampler {
             next_id: 0,
             iterations: 0,
             lighting: None,
+            probes: AreaProbes::new(config.probe_iterations),
+            warming: false,
+            collect_probes: true,
             stats: SmcStats::default(),
             timings: SmcTimings::default(),
         })
@@ -211,6 +227,7 @@ impl SmcSampler {
         self.particles.iter_mut().for_each(|p| *p = None);
         self.iterations = 0;
         self.lighting = None;
+        self.probes.clear();
     }
 
     /// The seed of VPL `id`'s radiosity paths.
@@ -252,7 +269,7 @@ impl SmcSampler {
         tm.candidates_ms += ms(t0);
         self.refresh_radiosities(scene, seed, &added, &mut st, &mut tm);
         let n = self.refresh_densities(scene, &mut tm);
-        self.write_fluxes(n, &mut st);
+        self.write_fluxes(scene, n, &mut st, &mut tm);
         self.iterations += 1;
         tm.total_ms = ms(start);
         self.stats = st;
@@ -341,9 +358,12 @@ impl SmcSampler {
         // Line 6: weight 1/p_hit(y) ∝ r_1(y)², the squared distance to the nearest other hit.
         let t0 = Instant::now();
         let hit_points: Vec<Vec3> = hits.iter().map(|h| h.y.p).collect();
-        let weights = match KnnDensity::new(&hit_points) {
-            Ok(d) if hits.len() > 1 => d.member_radii_sq(1),
-            _ => vec![1.0; hits.len()],
+        let hit_tree = KnnDensity::new(&hit_points).ok();
+        let nearest = hit_tree.as_ref().map(|d| d.member_nearest()).unwrap_or_default();
+        let weights: Vec<f32> = if hits.len() > 1 && nearest.len() == hits.len() {
+            nearest.iter().map(|n| n.map_or(f32::INFINITY, |(_, d2)| d2)).collect()
+        } else {
+            vec![1.0; hits.len()]
         };
         tm.knn_ms += ms(t0);
         let t0 = Instant::now();
@@ -359,6 +379,17 @@ impl SmcSampler {
             chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::radiosity_seed(seed, first_id + i as u64))).collect();
         let radiances: Vec<Vec3> = self.estimator.radiosity_many(scene, &jobs);
         tm.radiosity_ms += ms(t0);
+
+        // The hits become area probes, the candidates among them with their radiance.
+        if c.flux.probes() && self.collect_probes {
+            let t0 = Instant::now();
+            let sampled: Vec<(usize, Vec3)> = chosen.iter().copied().zip(radiances.iter().copied()).collect();
+            let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
+            if let Some(tree) = hit_tree {
+                self.probes.push(&hit_points, &normals, tree, &nearest, &sampled);
+            }
+            tm.knn_ms += ms(t0);
+        }
 
         // Line 8: candidate densities against Y with k = 1.
         let t0 = Instant::now();
@@ -495,13 +526,60 @@ impl SmcSampler {
         slots.len()
     }
 
-    /// The output: flux = L / (n · p) (eq. 5 and the flux convention of vpl-core).
-    fn write_fluxes(&mut self, n: usize, st: &mut SmcStats) {
+    /// The output: flux Φ (eq. 5 and the flux convention of vpl-core) as
+    /// the configured [`FluxEstimator`] makes it. Until cells have been
+    /// measured (and during the warm-up, whose flux nobody looks at) it is
+    /// the paper's L / (n p).
+    fn write_fluxes(&mut self, scene: &Scene, n: usize, st: &mut SmcStats, tm: &mut SmcTimings) {
+        let t0 = Instant::now();
+        let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
+        let sites: Vec<Site> =
+            slots.iter().filter_map(|&s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng })).collect();
+        if self.config.flux.probes() && !self.warming {
+            st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
+        }
+        let particle = |s: usize| self.particles[s].expect("occupied");
+        let knn = |p: &Particle| p.radiance / (n as f32 * p.density);
+        let mut fluxes: Vec<Vec3> = slots.iter().map(|&s| knn(&particle(s))).collect();
+        if self.config.flux.probes() && !self.warming {
+            if let Some(cells) = self.probes.cells(&sites) {
+                let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
+                let cell_total: f64 = cells.iter().map(|c| c.area).sum();
+                st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
+                let by_cell: Vec<Vec3> =
+                    slots.iter().zip(&cells).map(|(&s, c)| c.mean_radiance(particle(s).radiance) * c.area as f32).collect();
+                match self.config.flux {
+                    FluxEstimator::Voronoi => fluxes = by_cell,
+                    FluxEstimator::VoronoiSite => {
+                        fluxes = slots.iter().zip(&cells).map(|(&s, c)| particle(s).radiance * c.area as f32).collect();
+                    }
+                    FluxEstimator::KnnCalibrated => {
+                        // One factor: the cells' total flux over the kNN total, by luminance.
+                        let total = |f: &[Vec3]| f.iter().map(|v| luminance(*v) as f64).filter(|v| v.is_finite()).sum::<f64>();
+                        let (by_cells, by_knn) = (total(&by_cell), total(&fluxes));
+                        if by_knn > 0.0 {
+                            let c = (by_cells / by_knn) as f32;
+                            fluxes.iter_mut().for_each(|f| *f *= c);
+                        }
+                    }
+                    FluxEstimator::Knn => {}
+                }
+            }
+        }
+        tm.knn_ms += ms(t0);
         self.set.begin_frame();
+        let mut flux = slots.iter().zip(fluxes);
+        let mut next = flux.next();
         for s in 0..self.config.vpls {
             let v = self.particles[s].map(|p| {
-                let flux = p.radiance / (n as f32 * p.density);
-                Vpl { y: p.y.p, n: p.y.n, flux: if flux.is_finite() { flux } else { Vec3::ZERO }, id: p.id, bounce: 0 }
+                let f = match next {
+                    Some((&slot, f)) if slot == s => {
+                        next = flux.next();
+                        f
+                    }
+                    _ => Vec3::ZERO,
+                };
+                Vpl { y: p.y.p, n: p.y.n, flux: if f.is_finite() { f } else { Vec3::ZERO }, id: p.id, bounce: 0 }
             });
             self.set.set(s, v);
         }
@@ -542,9 +620,15 @@ impl VplSampler for SmcSampler {
     /// every frame then runs one iteration.
     fn next_frame(&mut self, frame: &Frame) -> &VplSet {
         if !self.started() {
-            for _ in 0..=self.config.warmup {
+            self.warming = true;
+            let iterations = self.config.warmup as usize + 2;
+            for w in 0..=self.config.warmup as usize {
+                // The last T iterations (this loop's and the frame's own) collect probes.
+                self.collect_probes = w + self.config.probe_iterations >= iterations;
                 self.iterate(frame.scene, frame.camera, frame.seed);
             }
+            self.warming = false;
+            self.collect_probes = true;
         }
         self.iterate(frame.scene, frame.camera, frame.seed)
     }
@@ -565,6 +649,8 @@ impl VplSampler for SmcSampler {
             .count("weakest", s.weakest)
             .count("added", s.added)
             .value("intensity_cv", s.intensity_cv as f64)
+            .value("knn_area_ratio", s.knn_area_ratio as f64)
+            .count("probe_rays", s.probe_rays)
             .ms("ms", t.total_ms)
             .ms("candidates_ms", t.candidates_ms)
             .ms("resampling_ms", t.resampling_ms)

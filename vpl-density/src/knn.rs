@@ -105,22 +105,6 @@ impl KnnDensity {
         Ok(qs.par_iter().map(|q| density(k, n, self.kth(&q.to_array(), kk))).collect())
     }
 
-    /// The nearest point of the set to each query: its index (in the order
-    /// the points were given) and squared distance, in parallel. An empty
-    /// set gives [`DensityError::TooFewPoints`].
-    pub fn nearest_many(&self, qs: &[Vec3]) -> Result<Vec<(usize, f32)>, DensityError> {
-        let Some(tree) = self.tree.as_ref() else {
-            return Err(DensityError::TooFewPoints { needed: 1, points: 0 });
-        };
-        Ok(qs
-            .par_iter()
-            .map(|q| {
-                let n = tree.query(&q.to_array()).nearest_one::<SquaredEuclidean<f32>>().execute();
-                (n.item as usize, n.distance)
-            })
-            .collect())
-    }
-
     /// Squared distance from every point of the set to its `k`-th nearest
     /// *other* point (the point itself is not its own neighbour), in the
     /// order the points were given. A set of at most `k` points gives
@@ -207,27 +191,6 @@ impl KnnDensity {
             .collect()
     }
 
-    /// The `k` nearest *other* points of every point of the set, nearest
-    /// first, as (index, squared distance), in the order the points were
-    /// given; a point with fewer than `k` others gets what there is.
-    pub fn member_neighbours(&self, k: usize) -> Vec<Vec<(usize, f32)>> {
-        let n = self.points.len();
-        let Some(kk) = NonZero::new((k + 1).min(n)) else {
-            return vec![Vec::new(); n];
-        };
-        let tree = self.tree.as_ref().expect("a non-empty set has a tree");
-        self.points
-            .par_iter()
-            .enumerate()
-            .map(|(i, q)| {
-                let found = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(kk).execute();
-                let mut out: Vec<(usize, f32)> = found.iter().map(|f| (f.item as usize, f.distance)).filter(|(j, _)| *j != i).collect();
-                out.truncate(k);
-                out
-            })
-            .collect()
-    }
-
     /// Density at every point of the set from its `k` nearest other points,
     /// `k / (N π r_k²)`; zero for a set too small to have k other points.
     pub fn members(&self, k: usize) -> Vec<f32> {
@@ -291,7 +254,6 @@ mod tests {
         let p = d.members(1);
         assert!((p[2] - 1.0 / (5.0 * PI)).abs() < 1e-7);
         assert!(d.member_radii_sq(5).iter().all(|r| r.is_infinite()));
-        assert_eq!(d.member_neighbours(2)[0], vec![(1, 1.0), (2, 4.0)]);
         assert_eq!(d.member_nearest()[4], Some((3, 1.0)));
         assert_eq!(KnnDensity::new(&[Vec3::ZERO]).unwrap().member_nearest(), vec![None]);
         let mut w = d.within(Vec3::new(2.0, 0.0, 0.0), 1.0);
@@ -300,8 +262,6 @@ mod tests {
         assert_eq!(d.nearest_accepted(Vec3::ZERO, Some(0), |j| j % 2 == 0), Some((2, 4.0)));
         assert_eq!(d.nearest_accepted(Vec3::ZERO, None, |j| j > 9), None);
         assert_eq!(d.nearest_accepted_n(Vec3::ZERO, None, |j| j != 1, 3), vec![(0, 0.0), (2, 4.0), (3, 9.0)]);
-        assert_eq!(d.member_neighbours(9)[4].len(), 4);
-        assert_eq!(d.nearest_many(&[Vec3::new(2.75, 0.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]).unwrap(), vec![(3, 0.0625), (0, 1.0)]);
         assert_eq!(d.members(5), vec![0.0; 5]);
     }
 
@@ -314,6 +274,5 @@ mod tests {
         let e = KnnDensity::new(&[]).unwrap();
         assert!(e.is_empty() && e.at(Vec3::ONE, 1).is_err() && e.at_many(&[Vec3::ONE], 1).is_err());
         assert!(e.members(1).is_empty());
-        assert_eq!(e.nearest_many(&[Vec3::ONE]).unwrap_err(), DensityError::TooFewPoints { needed: 1, points: 0 });
     }
 }

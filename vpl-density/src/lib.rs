@@ -18,8 +18,7 @@
 //!   well sampled and are rarely chosen).
 //! - [`KnnDensity::members`]: the density at each of the set's own points,
 //!   the point itself excluded from its neighbours.
-//! - Neighbour queries for other estimators: [`KnnDensity::nearest_many`],
-//!   [`KnnDensity::member_nearest`], [`KnnDensity::member_neighbours`],
+//! - Neighbour queries for other estimators: [`KnnDensity::member_nearest`],
 //!   [`KnnDensity::within`] and [`KnnDensity::nearest_accepted`] (the
 //!   nearest point a predicate takes, e.g. one facing the same way), which
 //!   SMC's Voronoi-cell flux uses.

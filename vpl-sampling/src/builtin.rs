@@ -2,7 +2,7 @@
 //! from the parameters with its crate's `from_params`.
 
 use crate::registry::{SamplerContext, SamplerEntry, SamplingError};
-use vpl_core::{ParamError, Params, VplSampler};
+use vpl_core::{Budget, ParamError, Params, VplSampler};
 use vpl_ir::{InstantRadiosity, IrConfig};
 use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
 use vpl_rr::{LightPaths, RrConfig, RrSampler, SamplerCandidates};
@@ -77,9 +77,24 @@ fn smc_knn(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, Sampl
 fn smc_with(cx: &SamplerContext, p: &Params, name: &str, flux: FluxEstimator) -> Result<Box<dyn VplSampler>, SamplingError> {
     cx.needs_vpls(name)?;
     cx.needs_indirect(name)?;
-    let mut config = SmcConfig::from_params(&cx.budget, p).map_err(param(name))?;
-    config.flux = p.get_or("flux", flux).map_err(param(name))?;
+    let config = smc_settings(&cx.budget, p, flux).map_err(param(name))?;
     SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
+}
+
+fn smc_settings(budget: &Budget, p: &Params, flux: FluxEstimator) -> Result<SmcConfig, ParamError> {
+    let mut config = SmcConfig::from_params(budget, p)?;
+    config.flux = p.get_or("flux", flux)?;
+    Ok(config)
+}
+
+/// The settings the built-in entry `name` (`smc` or `smc-knn`) gives its
+/// SMC sampler for `budget` and `p`; `None` for any other name.
+pub fn smc_config(name: &str, budget: &Budget, p: &Params) -> Option<Result<SmcConfig, ParamError>> {
+    match name {
+        "smc" => Some(smc_settings(budget, p, FluxEstimator::default())),
+        "smc-knn" => Some(smc_settings(budget, p, FluxEstimator::Knn)),
+        _ => None,
+    }
 }
 
 /// The built-in entries, in the order the toolkit lists them.

@@ -53,6 +53,7 @@
 #![warn(missing_docs)]
 
 mod builtin;
+pub use builtin::smc_config;
 mod registry;
 
 pub use registry::{BuildFn, Registry, SamplerContext, SamplerEntry, SamplingError};

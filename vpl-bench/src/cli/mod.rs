@@ -582,15 +582,8 @@ fn pipeline_spec(
 /// `estimate` with the sampler's own working memory where it is large:
 /// SMC's area probes.
 fn with_sampler_memory(estimate: vpl_render::MemoryEstimate, spec: &crate::pipeline::PipelineSpec) -> vpl_render::MemoryEstimate {
-    use vpl_sampling::{FluxEstimator, SmcConfig};
-    if spec.sampler != "smc" && spec.sampler != "smc-knn" {
-        return estimate;
-    }
-    let params = spec.params.clone();
-    let Ok(mut c) = SmcConfig::from_params(&spec.budget, &params) else { return estimate };
-    if spec.sampler == "smc-knn" && params.get::<FluxEstimator>("flux").ok().flatten().is_none() {
-        c.flux = FluxEstimator::Knn;
-    }
+    // A copy of the parameters: reading them here must not mark them read for the build.
+    let Some(Ok(c)) = vpl_sampling::smc_config(&spec.sampler, &spec.budget, &spec.params.clone()) else { return estimate };
     match c.probe_memory() {
         0 => estimate,
         bytes => estimate.with_part(

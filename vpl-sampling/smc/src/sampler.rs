@@ -533,15 +533,22 @@ impl SmcSampler {
     fn write_fluxes(&mut self, scene: &Scene, n: usize, st: &mut SmcStats, tm: &mut SmcTimings) {
         let t0 = Instant::now();
         let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
-        let sites: Vec<Site> =
-            slots.iter().filter_map(|&s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng })).collect();
-        if self.config.flux.probes() && !self.warming {
-            st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
-        }
         let particle = |s: usize| self.particles[s].expect("occupied");
-        let knn = |p: &Particle| p.radiance / (n as f32 * p.density);
-        let mut fluxes: Vec<Vec3> = slots.iter().map(|&s| knn(&particle(s))).collect();
+        // The flux of each slot (zero where it is empty), the paper's first.
+        let mut flux = vec![Vec3::ZERO; self.config.vpls];
+        for &s in &slots {
+            let p = particle(s);
+            flux[s] = p.radiance / (n as f32 * p.density);
+        }
         if self.config.flux.probes() && !self.warming {
+            let sites: Vec<Site> = slots
+                .iter()
+                .map(|&s| {
+                    let p = particle(s);
+                    Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng }
+                })
+                .collect();
+            st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
             if let Some(cells) = self.probes.cells(&sites) {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
@@ -549,17 +556,18 @@ impl SmcSampler {
                 let by_cell: Vec<Vec3> =
                     slots.iter().zip(&cells).map(|(&s, c)| c.mean_radiance(particle(s).radiance) * c.area as f32).collect();
                 match self.config.flux {
-                    FluxEstimator::Voronoi => fluxes = by_cell,
+                    FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiSite => {
-                        fluxes = slots.iter().zip(&cells).map(|(&s, c)| particle(s).radiance * c.area as f32).collect();
+                        slots.iter().zip(&cells).for_each(|(&s, c)| flux[s] = particle(s).radiance * c.area as f32)
                     }
                     FluxEstimator::KnnCalibrated => {
                         // One factor: the cells' total flux over the kNN total, by luminance.
-                        let total = |f: &[Vec3]| f.iter().map(|v| luminance(*v) as f64).filter(|v| v.is_finite()).sum::<f64>();
-                        let (by_cells, by_knn) = (total(&by_cell), total(&fluxes));
+                        let total =
+                            |f: &mut dyn Iterator<Item = Vec3>| f.map(|v| luminance(v) as f64).filter(|v| v.is_finite()).sum::<f64>();
+                        let (by_cells, by_knn) = (total(&mut by_cell.iter().copied()), total(&mut slots.iter().map(|&s| flux[s])));
                         if by_knn > 0.0 {
                             let c = (by_cells / by_knn) as f32;
-                            fluxes.iter_mut().for_each(|f| *f *= c);
+                            slots.iter().for_each(|&s| flux[s] *= c);
                         }
                     }
                     FluxEstimator::Knn => {}
@@ -568,18 +576,13 @@ impl SmcSampler {
         }
         tm.knn_ms += ms(t0);
         self.set.begin_frame();
-        let mut flux = slots.iter().zip(fluxes);
-        let mut next = flux.next();
-        for s in 0..self.config.vpls {
-            let v = self.particles[s].map(|p| {
-                let f = match next {
-                    Some((&slot, f)) if slot == s => {
-                        next = flux.next();
-                        f
-                    }
-                    _ => Vec3::ZERO,
-                };
-                Vpl { y: p.y.p, n: p.y.n, flux: if f.is_finite() { f } else { Vec3::ZERO }, id: p.id, bounce: 0 }
+        for (s, f) in flux.into_iter().enumerate() {
+            let v = self.particles[s].map(|p| Vpl {
+                y: p.y.p,
+                n: p.y.n,
+                flux: if f.is_finite() { f } else { Vec3::ZERO },
+                id: p.id,
+                bounce: 0,
             });
             self.set.set(s, v);
         }

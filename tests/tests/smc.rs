@@ -151,7 +151,7 @@ fn frame_to_frame_change(frames: &[Image]) -> f64 {
 fn static_frames(sampler: &mut dyn vpl_core::VplSampler, n: u64) -> (Vec<Image>, Vec<usize>) {
     let setup = SceneSetup::load("cornell").unwrap();
     let camera = setup.camera.with_resolution((96, 96)).unwrap();
-    let clamp = Some(GeometryClamp::for_budget(1024, setup.scene.surface_area()));
+    let clamp = Some(GeometryClamp::for_scene_area(1024, setup.scene.surface_area()));
     let mut vis = ShadowMaps::new(128).unwrap();
     let mut shader = InterleavedShader::new(clamp, 5);
     let s = vpl_render::FrameSettings { mode: vpl_core::Mode::Indirect, seed: 5, ..vpl_render::FrameSettings::default() };
@@ -275,7 +275,7 @@ fn newly_visible_rooms_fill_within_frames() {
     let room_px: Vec<usize> = (0..gbuf.samples.len()).filter(|&i| gbuf.samples[i].reflects() && in_room(gbuf.samples[i].p)).collect();
     eprintln!("room pixels: {} of {}", room_px.len(), gbuf.samples.len());
     assert!(room_px.len() > size.0 as usize * size.1 as usize / 5, "the room fills too little of the view");
-    let clamp = Some(GeometryClamp::for_budget(1024, scene.surface_area()));
+    let clamp = Some(GeometryClamp::for_scene_area(1024, scene.surface_area()));
     let room_light = |set: &VplSet| {
         let img = exhaustive_rt(scene, &gbuf, set, clamp);
         room_px.iter().map(|&i| vpl_core::image::luminance(img.data[i]) as f64).sum::<f64>()

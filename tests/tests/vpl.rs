@@ -117,7 +117,7 @@ fn c_filtered_interleaved_shading_matches_exhaustive_shading() {
     let (scene, camera) = cornell(128);
     let gbuf = render_gbuffer(&scene, &camera);
     let set = ir(&scene, 2048, 3);
-    let clamp = Some(GeometryClamp::for_budget(2048, scene.surface_area()));
+    let clamp = Some(GeometryClamp::for_scene_area(2048, scene.surface_area()));
     let mut vis = RayTraced::default();
     vis.update(&scene, &set);
     let exhaustive = ExhaustiveShader { clamp }.shade(&gbuf, &set, &vis);
@@ -156,7 +156,7 @@ fn d_clamped_vpls_match_the_clamped_path_tracer() {
         pt.clamp = clamp;
         render(&scene, &camera, &pt, RenderSettings { spp: 4096, seed: 1, frame: 0 }, &|_, _| {}).unwrap().image
     };
-    let g = GeometryClamp::for_budget(2048, scene.surface_area());
+    let g = GeometryClamp::for_scene_area(2048, scene.surface_area());
     let clamp = Some(g);
     let clamped_pt = pt_image(clamp);
     let vpl = exhaustive_rt(&scene, &gbuf, &ir(&scene, 2048, 3), clamp);
@@ -211,7 +211,7 @@ fn vpl_frames_are_bit_identical_across_thread_counts() {
         pool.install(|| {
             let mut sampler = InstantRadiosity::new(IrConfig { vpls: 300, ..IrConfig::default() }).unwrap();
             let mut vis = ShadowMaps::new(32).unwrap();
-            let mut shader = InterleavedShader::new(Some(GeometryClamp::for_budget(300, scene.surface_area())), 7);
+            let mut shader = InterleavedShader::new(Some(GeometryClamp::for_scene_area(300, scene.surface_area())), 7);
             let s = vpl_render::FrameSettings { seed: 7, ..vpl_render::FrameSettings::default() };
             vpl_render::render_frame(&scene, &camera, s, None, &mut sampler, &mut vis, &mut shader).image
         })

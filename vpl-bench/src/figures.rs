@@ -124,7 +124,7 @@ pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> R
     let (scene, camera) = setup.frame(frame)?;
     let camera = camera.with_resolution(s.size)?;
     let vpls = 2048;
-    let clamp = GeometryClamp::for_budget(vpls, scene.surface_area());
+    let clamp = GeometryClamp::for_view(vpls, &scene, &camera);
     let (pt, pt_se, pt_s) = reference(&scene, &camera, None, s.reference_spp, s.seed)?;
     let (cpt, cpt_se, cpt_s) = reference(&scene, &camera, Some(clamp), s.reference_spp, s.seed ^ 1)?;
     let exposure = exposure_for(&pt);
@@ -151,7 +151,7 @@ pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> R
     let mut f8 = Vec::new();
     f8.push(panel("pt", &format!("path tracing, {} spp", s.reference_spp), &pt, None, pt_s)?);
     let mut clamped =
-        panel("pt_clamped", "clamped path tracing (G ≤ I / A after the primary hit)", &cpt, Some((&cpt, Some(&cpt_se))), cpt_s)?;
+        panel("pt_clamped", "clamped path tracing (G ≤ I / A_view after the primary hit)", &cpt, Some((&cpt, Some(&cpt_se))), cpt_s)?;
     // Both images are noisy: remove the variance of each.
     clamped.rmse = (mse(&cpt, &pt)? - reference_variance(&pt_se) - reference_variance(&cpt_se)).max(0.0).sqrt();
     f8.push(clamped);
@@ -185,7 +185,7 @@ pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> R
 pub struct BudgetPoint {
     /// VPLs.
     pub vpls: usize,
-    /// Clamp G_max = I / A.
+    /// Clamp G_max = I / A_view.
     pub g_max: f32,
     /// RMSE of the VPL image against path tracing.
     pub rmse: f64,
@@ -211,7 +211,7 @@ pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<Bud
     let gbuf = render_gbuffer(&scene, &camera);
     let mut out = Vec::new();
     for &b in &s.budgets {
-        let clamp = GeometryClamp::for_budget(b, scene.surface_area());
+        let clamp = GeometryClamp::for_view(b, &scene, &camera);
         let (set, smc_s) = smc_vpls(&scene, &camera, &gbuf, b, s.fig10_warmup, s.seed)?;
         let (img, t) = shade(&gbuf, &set, &scene, &mut RayTraced::default(), &mut ExhaustiveShader { clamp: Some(clamp) });
         let (cpt, _, _) = reference(&scene, &camera, Some(clamp), s.fig10_spp, s.seed ^ 1)?;
@@ -241,7 +241,7 @@ pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &Fig
     let _ = writeln!(
         md,
         "Indirect light only, {}×{} pixels, max depth 5. The three VPL images of a scene use the same 2048 SMC VPLs (100 warm-up \
-         iterations) and the clamp G_max = I / A; clamped path tracing applies that clamp to the segment leaving the primary hit \
+         iterations) and the clamp G_max = I / A_view; clamped path tracing applies that clamp to the segment leaving the primary hit \
          (except connections to a light), which is the limit of infinitely many clamped VPLs. RMSE against path tracing ({} spp) \
          has the reference's noise removed. PNGs at one exposure per scene.\n",
         s.size.0, s.size.1, s.reference_spp
@@ -301,7 +301,7 @@ pub fn write_fig10(dir: &Path, figs: &[(String, Vec<BudgetPoint>)], s: &FigureSe
     let mut md = String::from("# Fig. 10: error against the VPL budget\n\n");
     let _ = writeln!(
         md,
-        "SMC VPLs ({} warm-up iterations), every VPL at every pixel with ray-traced visibility, clamp G_max = I / A, {}×{} pixels, \
+        "SMC VPLs ({} warm-up iterations), every VPL at every pixel with ray-traced visibility, clamp G_max = I / A_view, {}×{} pixels, \
          against path tracing ({} spp; its noise removed from the RMSE). \"Clamp alone\" is clamped path tracing with the same G_max \
          against path tracing: the energy the clamp removes, which more VPLs (a looser clamp) give back. Error images: 2× |VPL − \
          path tracing| at the reference's exposure.\n",

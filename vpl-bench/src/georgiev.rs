@@ -99,6 +99,7 @@ fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSp
         visibility: VisibilitySpec::RayTraced,
         shading: ShadingSpec::Exhaustive,
         clamp: Some(clamp),
+        compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: s.seed,
@@ -142,7 +143,7 @@ fn run(
 ) -> Result<(MethodFigures, Image), BenchError> {
     let setup = SceneSetup::load(scene_name)?;
     let camera = setup.camera.with_resolution(s.size)?;
-    let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_view(s.vpls, &setup.scene, &camera);
     let mut p = spec(sampler, s, clamp).build(&Registry::builtin(), &setup.scene)?;
     let mut f = MethodFigures::default();
     let mut last = Image::new(s.size.0, s.size.1);
@@ -174,7 +175,7 @@ fn run(
 pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<GeorgievReport, BenchError> {
     let setup = SceneSetup::load("corner")?;
     let camera = setup.camera.with_resolution(s.size)?;
-    let clamp = GeometryClamp::for_budget(s.vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_view(s.vpls, &setup.scene, &camera);
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = Some(clamp);
     progress(&format!("corner reference: path tracer, indirect, {} spp", s.reference_spp));
@@ -198,7 +199,7 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
     let _ = writeln!(md, "# Georgiev & Slusallek (EG 2010): Russian-roulette VPL acceptance\n");
     let _ = writeln!(
         md,
-        "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer through the pixel centres, indirect, same clamp, {} spp; MSE is against it with its own variance ({:.3e}, from its per-pixel standard errors) subtracted. IR uses fresh light paths every frame. Seed {}.\n",
+        "`corner` (the paper's EG scene), frame 0, {}x{}, I = {} stored VPLs, ray-traced visibility, exhaustive shading, clamp G_max = I/A_view = {:.2} m^-2 for both; {} warm-up frames (RR learns Phi_total from the previous frame's indirect image), then {} measured frames; reference: path tracer through the pixel centres, indirect, same clamp, {} spp; MSE is against it with its own variance ({:.3e}, from its per-pixel standard errors) subtracted. IR uses fresh light paths every frame. Seed {}.\n",
         s.size.0, s.size.1, s.vpls, clamp.g_max, s.warmup_frames, s.frames, s.reference_spp, var, s.seed
     );
     let _ = writeln!(

@@ -68,7 +68,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
     let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?;
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
-    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_scene_area(vpls, setup.scene.surface_area());
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
     let mut rows: Vec<[f64; 14]> = Vec::new();
     let mut first = (0.0, 0);

@@ -58,6 +58,8 @@ pub struct PipelineSpec {
     pub shading: ShadingSpec,
     /// Geometry-term clamp.
     pub clamp: Option<GeometryClamp>,
+    /// Gather rays per pixel of the clamp's bias compensation (0: none).
+    pub compensation: u32,
     /// Which paths the frames include.
     pub mode: Mode,
     /// Light samples per pixel of direct light.
@@ -79,6 +81,7 @@ impl PipelineSpec {
             .visibility(self.visibility)
             .shader(self.shading)
             .clamp(Clamp::from(self.clamp))
+            .compensation(self.compensation)
             .mode(self.mode)
             .direct_samples(self.direct_samples)
             .seed(self.seed)

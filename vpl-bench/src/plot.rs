@@ -27,7 +27,7 @@ pub enum PlotError {
 /// One line of a chart.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    /// Legend entry.
+    /// Legend entry (empty: none).
     pub label: String,
     /// Points (x, y), drawn in order.
     pub points: Vec<(f64, f64)>,
@@ -135,10 +135,11 @@ pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), P
                     let style = col.stroke_width(if s.bold { 3 } else { 2 });
                     let pts: Vec<(f64, f64)> =
                         s.points.iter().copied().filter(|p| (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)).collect();
-                    c.draw_series(LineSeries::new(pts.clone(), style))
-                        .map_err(|e| draw(&e))?
-                        .label(s.label.clone())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(3)));
+                    let drawn = c.draw_series(LineSeries::new(pts.clone(), style)).map_err(|e| draw(&e))?;
+                    // A series without a label (another run of a method already named) stays out of the legend.
+                    if !s.label.is_empty() {
+                        drawn.label(s.label.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(3)));
+                    }
                     if s.markers {
                         c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, col.filled()))).map_err(|e| draw(&e))?;
                     }

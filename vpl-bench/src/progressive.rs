@@ -154,7 +154,7 @@ pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig
     let setup = SceneSetup::load(&s.scene)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let scene = &setup.scene;
-    let clamp = s.clamp_budget.map(|i| GeometryClamp::for_budget(i, scene.surface_area()));
+    let clamp = s.clamp_budget.map(|i| GeometryClamp::for_scene_area(i, scene.surface_area()));
     let config = |seed: u64| ProgressiveConfig { seed, caustic_paths: s.caustic_paths, clamp, ..ProgressiveConfig::default() };
     progress(&format!("path-traced reference, {} spp", s.reference_spp));
     let (reference, reference_se, _) = pt_reference(scene, &camera, s.reference_spp, s.seed ^ 0x5eed)?;
@@ -246,7 +246,7 @@ pub struct Fig8Settings {
     /// Folder of the Mitsuba `cornell` references (`reference_path_d5.exr`), if any.
     pub mitsuba: Option<PathBuf>,
     /// The VPL budget I of the progressive renderer's geometry clamp
-    /// G ≤ I / A (the toolkit's rule, [`GeometryClamp::for_budget`]); the
+    /// G ≤ I / A (the toolkit's rule, [`GeometryClamp::for_scene_area`]); the
     /// unclamped renderer runs too.
     pub clamp_budget: usize,
     /// Seed.
@@ -302,7 +302,7 @@ pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn
         }
     };
     let scene = &setup.scene;
-    let clamp = GeometryClamp::for_budget(s.clamp_budget, scene.surface_area());
+    let clamp = GeometryClamp::for_scene_area(s.clamp_budget, scene.surface_area());
     let run = |clamp: Option<GeometryClamp>| -> Result<(Image, u64, f64), CoreError> {
         progress(&format!("{scene_name}: progressive ({}), {} s", if clamp.is_some() { "clamped" } else { "unclamped" }, s.seconds));
         let mut r = Progressive::new(scene, camera.clone(), ProgressiveConfig { seed: s.seed, clamp, ..ProgressiveConfig::default() })

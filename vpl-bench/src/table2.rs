@@ -102,7 +102,7 @@ pub fn time_scene(
 ) -> Result<(Table2Row, Option<String>), BenchError> {
     let setup = SceneSetup::load(scene_name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     let backend = backend.instantiate()?;
     let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &backend.services())?;
     let budget = Budget::new(vpls, 5);

@@ -22,6 +22,7 @@ fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: u
         visibility,
         shading: ShadingSpec::Interleaved { filter: true },
         clamp: Some(clamp),
+        compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: 3,
@@ -33,7 +34,7 @@ fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: u
 fn gpu_backend_renders_the_cpu_backends_frames() {
     let setup = SceneSetup::load("office").unwrap();
     let vpls = 256;
-    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_scene_area(vpls, setup.scene.surface_area());
     for (sampler, vis) in [("smc", VisibilitySpec::ShadowMaps(64)), ("ir", VisibilitySpec::RayTraced)] {
         let registry = Registry::builtin();
         let mut gpu = match spec(sampler, BackendKind::Gpu, vis, vpls, clamp).build(&registry, &setup.scene) {

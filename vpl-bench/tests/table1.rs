@@ -15,6 +15,7 @@ fn tiny() -> Table1Spec {
         max_depth: 5,
         shadow_map_res: 32,
         seed: 3,
+        seeds: 2,
         backend: vpl_bench::pipeline::BackendKind::Cpu,
     }
 }
@@ -36,32 +37,45 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     let spec = tiny();
     let whole = fresh("whole");
     let s = table1::run(&reg, &spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
-    assert_eq!((s.ran, s.kept, s.total_units), (5, 0, 5));
+    // Two methods × two seeds, and three frames of truth.
+    assert_eq!((s.ran, s.kept, s.total_units), (7, 0, 7));
     let r = table1::merge(&whole).unwrap();
     let row = &r.rows[0];
     assert_eq!(row.truth.len(), 3);
     assert_eq!(row.methods.len(), 2);
     for m in &row.methods {
         assert!(m.error.e.is_finite() && m.error.e > 0.0 && m.error.e_prime.is_finite(), "{m:?}");
-        assert_eq!((m.error.count, m.error.count_prime), (24, 16));
+        assert_eq!((m.error.count, m.error.count_prime), (48, 32));
+        assert_eq!((m.luminance.len(), m.e_per_seed.len()), (2, 2));
+        // The two seeds are different runs, and the pooled |E| is their mean.
+        assert_ne!(m.luminance[0], m.luminance[1], "{}: the seeds gave the same run", m.method);
+        assert!((m.error.e - (m.e_per_seed[0] + m.e_per_seed[1]) / 2.0).abs() < 1e-12);
+        let ci = m.intervals;
+        assert!(ci.e.lo <= m.error.e && m.error.e <= ci.e.hi && ci.e.lo < ci.e.hi, "{ci:?}");
+        assert!(ci.bias.lo <= m.error.bias && m.error.bias <= ci.bias.hi, "{ci:?}");
+        let split = m.split.expect("two seeds split the error");
+        assert!(split.mse > 0.0 && (0.0..=1.0).contains(&split.noise_share()));
     }
+    assert_eq!(row.comparisons.len(), 1);
+    assert_eq!(row.comparisons[0].method, "ir");
     // The truth is not black: the tracked pixels see lit surfaces.
     assert!(row.truth.iter().flatten().filter(|l| **l > 0.0).count() >= 12, "{:?}", row.truth);
     let md = read(&whole, "table1.md");
     assert!(md.contains("| `maze` |") && md.contains("paper SMC") && md.contains("0.0221"), "{md}");
+    assert!(md.contains("bias and how much noise") && md.contains("bootstrap"), "{md}");
     assert!(read(&whole, "table1.csv").lines().count() == 3);
     assert!(whole.join("fig7_maze.png").exists());
 
     // A second call finds every unit done and keeps it.
     let again = table1::run(&reg, &spec, &whole, Shard::ALL, &mut |_| {}).unwrap();
-    assert_eq!((again.ran, again.kept), (0, 5));
+    assert_eq!((again.ran, again.kept), (0, 7));
 
     let split = fresh("split");
     let a = table1::run(&reg, &spec, &split, Shard { index: 0, count: 2 }, &mut |_| {}).unwrap();
     // Half the units are missing before the second shard runs.
-    assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 2, total: 5, .. })));
+    assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 3, total: 7, .. })));
     let b = table1::run(&reg, &spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
-    assert_eq!((a.ran, b.ran), (3, 2));
+    assert_eq!((a.ran, b.ran), (4, 3));
     table1::merge(&split).unwrap();
     for f in ["table1.json", "table1.md", "table1.csv", "fig7.csv"] {
         assert!(read(&whole, f) == read(&split, f), "{f} differs between the whole and the sharded run");
@@ -80,9 +94,9 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     let small = fresh("small");
     let at_other_size = Table1Spec { size: (spec.size.0, spec.size.1 + 8), ..spec.clone() };
     table1::run(&reg, &at_other_size, &small, Shard::ALL, &mut |_| {}).unwrap();
-    std::fs::copy(small.join("units/maze/ir.json"), whole.join("units/maze/ir.json")).unwrap();
+    std::fs::copy(small.join("units/maze/ir_seed1.json"), whole.join("units/maze/ir_seed1.json")).unwrap();
     let e = table1::merge(&whole).unwrap_err().to_string();
-    assert!(e.contains("ir.json") && e.contains("size"), "{e}");
+    assert!(e.contains("ir_seed1.json") && e.contains("size"), "{e}");
     std::fs::remove_dir_all(&small).unwrap();
     std::fs::remove_dir_all(&whole).unwrap();
     std::fs::remove_dir_all(&split).unwrap();
@@ -97,8 +111,11 @@ fn specs_and_shards_are_checked() {
     s.methods = vec!["nope".into()];
     assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("unknown method 'nope'"));
     let mut s = tiny();
-    s.rows[0].id = "sponza".into();
+    s.rows[0].id = "sponza-crytek".into();
     assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("unknown sequence"));
+    let mut s = tiny();
+    s.seeds = 0;
+    assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("seeds"));
     assert!("1/2".parse::<Shard>().is_ok());
     for bad in ["2/2", "1", "a/b", "0/0"] {
         assert!(bad.parse::<Shard>().is_err(), "{bad}");
@@ -108,8 +125,16 @@ fn specs_and_shards_are_checked() {
     for k in 0..units.len() {
         assert_eq!((0..3).filter(|&i| Shard { index: i, count: 3 }.owns(k)).count(), 1);
     }
-    // The quick profile's windows hold the paper's five rows.
+    // The quick profile's windows hold the paper's five rows, then the two on
+    // real geometry where their models are here; three seeds.
     let q = Table1Spec::quick();
     q.validate(&Registry::builtin()).unwrap();
-    assert_eq!(q.rows.iter().map(|r| r.id.as_str()).collect::<Vec<_>>(), ["office", "courtyard", "maze", "atrium", "courtyard-sun"]);
+    let skipped: Vec<&str> = table1::skipped_rows().iter().map(|(id, _)| *id).collect();
+    let expected: Vec<&str> = ["office", "courtyard", "maze", "atrium", "courtyard-sun", "sponza", "munich"]
+        .into_iter()
+        .filter(|id| !skipped.contains(id))
+        .collect();
+    assert_eq!(q.rows.iter().map(|r| r.id.as_str()).collect::<Vec<_>>(), expected);
+    assert!(skipped.iter().all(|id| ["sponza", "munich"].contains(id)), "{skipped:?}");
+    assert_eq!(q.seeds, 3);
 }

@@ -51,6 +51,10 @@ impl Purpose {
     pub const PHOTON: Purpose = Purpose(18);
     /// Stochastic VPL culling decisions (index = VPL number in the pass).
     pub const CULL: Purpose = Purpose(19);
+    /// Gather rays of the clamp's bias compensation (index = pixel).
+    pub const COMPENSATION: Purpose = Purpose(20);
+    /// Bootstrap draws of a table's confidence intervals (index = table row).
+    pub const CONFIDENCE: Purpose = Purpose(21);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

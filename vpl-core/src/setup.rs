@@ -120,16 +120,21 @@ impl SceneSetup {
         Ok(self)
     }
 
+    /// The camera at frame `frame` of the sequence (the scene's camera without one).
+    pub fn camera_at_frame(&self, frame: u32) -> Result<Camera> {
+        match self.sequence.as_ref().and_then(|seq| seq.camera_at(seq.time(frame))) {
+            Some((o, g)) => self.camera.looking(o, g),
+            None => Ok(self.camera.clone()),
+        }
+    }
+
     /// Scene and camera at frame `frame` of the sequence (frame 0 without one).
     pub fn frame(&self, frame: u32) -> Result<(Scene, Camera)> {
+        let camera = self.camera_at_frame(frame)?;
         let Some(seq) = &self.sequence else {
-            return Ok((self.scene.clone(), self.camera.clone()));
+            return Ok((self.scene.clone(), camera));
         };
         let t = seq.time(frame);
-        let camera = match seq.camera_at(t) {
-            Some((o, g)) => self.camera.looking(o, g)?,
-            None => self.camera.clone(),
-        };
         if seq.lights.is_empty() {
             return Ok((self.scene.clone(), camera));
         }

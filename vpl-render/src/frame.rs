@@ -1,5 +1,6 @@
 //! One frame of VPL rendering, stage by stage, timed.
 
+use crate::compensation::{Compensation, compensate};
 use std::time::Instant;
 use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, Stats, VisibilityUpdate, VplSampler, VplVisibility};
 use vpl_shading::{direct_light, render_gbuffer};
@@ -21,11 +22,14 @@ pub struct FrameSettings {
     pub index: u64,
     /// Time in seconds.
     pub time: f32,
+    /// Bias compensation of the shader's clamp (`None`: the clamped image as
+    /// it is); see [`crate::compensation`].
+    pub compensation: Option<Compensation>,
 }
 
 impl Default for FrameSettings {
     fn default() -> Self {
-        FrameSettings { mode: Mode::Full, max_depth: 5, direct_samples: 16, seed: 0, index: 0, time: 0.0 }
+        FrameSettings { mode: Mode::Full, max_depth: 5, direct_samples: 16, seed: 0, index: 0, time: 0.0, compensation: None }
     }
 }
 
@@ -40,6 +44,8 @@ pub struct StageTimings {
     pub visibility_ms: f64,
     /// Indirect shading (filter included).
     pub shading_ms: f64,
+    /// Bias compensation of the clamp.
+    pub compensation_ms: f64,
     /// Direct light.
     pub direct_ms: f64,
     /// The whole frame.
@@ -89,8 +95,8 @@ fn ms(t: Instant) -> f64 {
 }
 
 /// Renders one frame: the G-buffer; then, when the mode and depth keep paths
-/// with ≥ 2 scattering vertices, the sampler's VPLs, the visibility update
-/// and indirect shading; then directly seen emission (k = 0) and direct
+/// with ≥ 2 scattering vertices, the sampler's VPLs, the visibility update,
+/// indirect shading and the clamp's bias compensation if asked for; then directly seen emission (k = 0) and direct
 /// light (k = 1) where the mode keeps them. `previous` is the indirect
 /// image of the previous frame ([`FrameOutput::indirect`]), which samplers
 /// that adapt to the image (Russian-roulette acceptance) read.
@@ -149,6 +155,15 @@ pub fn render_frame_on(
         image = shader.shade(&gbuffer, vpls, vis);
         t.shading_ms = ms(t0);
         note(&mut non_finite, "indirect shading", count_non_finite(&image));
+        if let Some(c) = s.compensation {
+            let t0 = Instant::now();
+            let added = compensate(scene, &gbuffer, c, s.max_depth, s.seed, s.index);
+            t.compensation_ms = ms(t0);
+            note(&mut non_finite, "bias compensation", count_non_finite(&added));
+            for (o, a) in image.data.iter_mut().zip(&added.data) {
+                *o += *a;
+            }
+        }
         sampler_stats = sampler.stats();
         indirect = Some(image.clone());
     }

@@ -60,6 +60,7 @@
 
 mod backend;
 pub mod compare;
+pub mod compensation;
 mod error;
 mod frame;
 pub mod memory;
@@ -69,6 +70,7 @@ pub mod sequence;
 mod spec;
 
 pub use backend::{Backend, CpuBackend};
+pub use compensation::Compensation;
 pub use error::RenderError;
 pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_on};
 pub use memory::MemoryEstimate;

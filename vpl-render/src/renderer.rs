@@ -3,6 +3,7 @@
 //! indirect image) from frame to frame.
 
 use crate::backend::{Backend, CpuBackend};
+use crate::compensation::Compensation;
 use crate::error::RenderError;
 use crate::frame::{FrameOutput, FrameSettings, render_frame_on};
 use crate::spec::{Clamp, ShadingSpec, VisibilitySpec};
@@ -48,6 +49,7 @@ pub struct RendererBuilder<'a> {
     visibility: VisibilitySpec,
     shading: ShadingSpec,
     clamp: Clamp,
+    compensation: u32,
     mode: Mode,
     direct_samples: u32,
     seed: u64,
@@ -107,6 +109,13 @@ impl<'a> RendererBuilder<'a> {
     /// The geometry-term clamp ([`Clamp::Auto`] by default).
     pub fn clamp(mut self, clamp: Clamp) -> Self {
         self.clamp = clamp;
+        self
+    }
+
+    /// Bias compensation of the clamp with `gather_rays` rays per pixel
+    /// (0, the default: none); see [`crate::compensation`].
+    pub fn compensation(mut self, gather_rays: u32) -> Self {
+        self.compensation = gather_rays;
         self
     }
 
@@ -173,15 +182,22 @@ impl<'a> RendererBuilder<'a> {
                 registry.build(&name, self.budget, &backend.services(), &self.params)?
             }
         };
-        let clamp = self.clamp.resolve(self.budget.vpls, self.scene);
         let visibility = backend.visibility(self.visibility, &self.budget)?;
-        let shader = backend.shader(self.shading, clamp, self.seed)?;
+        // A rule that needs no view is resolved now, and the shader built with
+        // it; the view rule waits for the first frame's camera.
+        let (clamp, shader) = match self.clamp.without_view(self.budget.vpls, self.scene) {
+            Some(c) => (c, Some(backend.shader(self.shading, c, self.seed)?)),
+            None => (None, None),
+        };
         Ok(Renderer {
             budget: self.budget,
             mode: self.mode,
             direct_samples: self.direct_samples,
             seed: self.seed,
+            clamp_rule: self.clamp,
             clamp,
+            compensation: self.compensation,
+            shading: self.shading,
             backend,
             sampler,
             visibility,
@@ -199,11 +215,16 @@ pub struct Renderer {
     mode: Mode,
     direct_samples: u32,
     seed: u64,
+    clamp_rule: Clamp,
     clamp: Option<GeometryClamp>,
+    compensation: u32,
+    shading: ShadingSpec,
     backend: Box<dyn Backend>,
     sampler: Box<dyn VplSampler>,
     visibility: Box<dyn VplVisibility>,
-    shader: Box<dyn IndirectShader>,
+    /// Built with the resolved clamp: at build time, or at the first frame
+    /// under the view rule.
+    shader: Option<Box<dyn IndirectShader>>,
     previous: Option<Image>,
 }
 
@@ -219,6 +240,7 @@ impl Renderer {
             visibility: VisibilitySpec::default(),
             shading: ShadingSpec::default(),
             clamp: Clamp::Auto,
+            compensation: 0,
             mode: Mode::Full,
             direct_samples: 16,
             seed: 0,
@@ -228,6 +250,17 @@ impl Renderer {
 
     /// Renders frame `index` (at `time` seconds) of `scene` seen by `camera`.
     pub fn render(&mut self, scene: &Scene, camera: &Camera, index: u64, time: f32) -> Result<FrameOutput, RenderError> {
+        let shader = match &mut self.shader {
+            Some(shader) => shader,
+            unbuilt => {
+                self.clamp = self.clamp_rule.resolve(self.budget.vpls, scene, camera);
+                unbuilt.insert(self.backend.shader(self.shading, self.clamp, self.seed)?)
+            }
+        };
+        let compensation = match self.clamp {
+            Some(clamp) if self.compensation > 0 => Some(Compensation { clamp, gather_rays: self.compensation }),
+            _ => None,
+        };
         let settings = FrameSettings {
             mode: self.mode,
             max_depth: self.budget.max_depth,
@@ -235,6 +268,7 @@ impl Renderer {
             seed: self.seed,
             index,
             time,
+            compensation,
         };
         let t0 = Instant::now();
         let gbuffer = self.backend.gbuffer(scene, camera)?;
@@ -248,7 +282,7 @@ impl Renderer {
             self.previous.as_ref(),
             self.sampler.as_mut(),
             self.visibility.as_mut(),
-            self.shader.as_mut(),
+            shader.as_mut(),
         );
         if let Some((stage, count)) = out.non_finite {
             return Err(RenderError::NonFinite { stage, count, frame: index });
@@ -262,9 +296,20 @@ impl Renderer {
         self.budget
     }
 
-    /// The geometry clamp of the shader.
+    /// The geometry clamp of the shader: `None` when off, and under
+    /// [`Clamp::Auto`] until the first frame has fixed it from its view.
     pub fn clamp(&self) -> Option<GeometryClamp> {
         self.clamp
+    }
+
+    /// The rule the clamp follows.
+    pub fn clamp_rule(&self) -> Clamp {
+        self.clamp_rule
+    }
+
+    /// Gather rays per pixel of the clamp's bias compensation (0: none).
+    pub fn compensation(&self) -> u32 {
+        self.compensation
     }
 
     /// Which paths frames include.
@@ -297,9 +342,10 @@ impl Renderer {
         self.visibility.as_ref()
     }
 
-    /// The indirect shader.
-    pub fn shader(&self) -> &dyn IndirectShader {
-        self.shader.as_ref()
+    /// The indirect shader (`None` under [`Clamp::Auto`] before the first
+    /// frame, which builds it with the clamp of its view).
+    pub fn shader(&self) -> Option<&dyn IndirectShader> {
+        self.shader.as_deref()
     }
 
     /// The last frame's indirect image.

@@ -1,6 +1,6 @@
 //! What the stages after sampling are: visibility, shading, clamp.
 
-use vpl_core::{GeometryClamp, Scene};
+use vpl_core::{Camera, GeometryClamp, Scene};
 
 /// VPL-to-pixel visibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,10 +40,14 @@ impl Default for ShadingSpec {
 /// The geometry-term clamp of VPL shading.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Clamp {
-    /// G_max = I / A: a VPL nearer a receiver than the mean VPL spacing
-    /// √(A/I) is clamped ([`GeometryClamp::for_budget`]).
+    /// G_max = I / A_view from the view of the first frame a renderer draws
+    /// ([`GeometryClamp::for_view`]), kept for the frames after it so that a
+    /// moving camera does not make the clamp flicker.
     #[default]
     Auto,
+    /// G_max = I / A with A the whole scene's surface area
+    /// ([`GeometryClamp::for_scene_area`]).
+    SceneArea,
     /// No clamp (unbiased, noisy near corners).
     Off,
     /// This clamp.
@@ -51,12 +55,21 @@ pub enum Clamp {
 }
 
 impl Clamp {
-    /// The clamp for a budget of `vpls` on `scene`.
-    pub fn resolve(self, vpls: usize, scene: &Scene) -> Option<GeometryClamp> {
+    /// The clamp for a budget of `vpls` on `scene` seen by `camera`.
+    pub fn resolve(self, vpls: usize, scene: &Scene, camera: &Camera) -> Option<GeometryClamp> {
         match self {
-            Clamp::Auto => Some(GeometryClamp::for_budget(vpls, scene.surface_area())),
-            Clamp::Off => None,
-            Clamp::Value(c) => Some(c),
+            Clamp::Auto => Some(GeometryClamp::for_view(vpls, scene, camera)),
+            other => other.without_view(vpls, scene).flatten(),
+        }
+    }
+
+    /// The clamp when the rule needs no view (every rule but `Auto`).
+    pub(crate) fn without_view(self, vpls: usize, scene: &Scene) -> Option<Option<GeometryClamp>> {
+        match self {
+            Clamp::Auto => None,
+            Clamp::SceneArea => Some(Some(GeometryClamp::for_scene_area(vpls, scene.surface_area()))),
+            Clamp::Off => Some(None),
+            Clamp::Value(c) => Some(Some(c)),
         }
     }
 }

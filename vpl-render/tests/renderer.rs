@@ -23,9 +23,9 @@ fn the_builder_renders_what_the_stages_render_by_hand() {
         .seed(11)
         .build()
         .unwrap();
-    // The auto clamp reads the budget and the scene's area.
-    let clamp = GeometryClamp::for_budget(96, setup.scene.surface_area());
-    assert_eq!(renderer.clamp(), Some(clamp));
+    // The auto clamp reads the budget and the first frame's view.
+    assert_eq!(renderer.clamp(), None);
+    let clamp = GeometryClamp::for_view(96, &setup.scene, &camera);
     assert_eq!(renderer.budget().max_depth, 4);
 
     let mut ir = InstantRadiosity::new(IrConfig { vpls: 96, bounces: 2, ..IrConfig::default() }).unwrap();
@@ -33,7 +33,8 @@ fn the_builder_renders_what_the_stages_render_by_hand() {
     let mut shader = ExhaustiveShader { clamp: Some(clamp) };
     for index in 0..2 {
         let built = renderer.render(&setup.scene, &camera, index, 0.0).unwrap();
-        let s = FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 2, seed: 11, index, time: 0.0 };
+        assert_eq!(renderer.clamp(), Some(clamp));
+        let s = FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 2, seed: 11, index, time: 0.0, compensation: None };
         let by_hand = render_frame(&setup.scene, &camera, s, None, &mut ir, &mut vis, &mut shader);
         assert_eq!(built.stored, by_hand.stored, "frame {index}");
         assert!(built.image.data == by_hand.image.data, "frame {index}: the builder's image differs from the stages'");
@@ -111,4 +112,25 @@ fn a_non_finite_vpl_fails_the_frame_naming_the_stage() {
     let e = r.render(&setup.scene, &camera, 0, 0.0).unwrap_err();
     assert!(matches!(e, RenderError::NonFinite { stage: "the VPL sampler", count: 1, frame: 0 }), "{e}");
     assert!(e.to_string().contains("the VPL sampler produced 1 non-finite value"), "{e}");
+}
+
+/// The default clamp is resolved from the first frame's view and kept when
+/// the camera moves; a rule that needs no view is resolved at build time.
+#[test]
+fn the_view_clamp_is_fixed_by_the_first_frame() {
+    let setup = SceneSetup::load("office").unwrap();
+    let near = setup.camera.with_resolution((16, 12)).unwrap();
+    let far = near.looking(near.origin - near.forward() * 10.0, near.target).unwrap();
+    let (g_near, g_far) = (GeometryClamp::for_view(64, &setup.scene, &near), GeometryClamp::for_view(64, &setup.scene, &far));
+    assert!((g_far.g_max / g_near.g_max - 1.0).abs() > 0.1, "the two views must differ for the test to tell");
+    let mut r =
+        Renderer::builder(&setup.scene).vpls(64).shader(ShadingSpec::Exhaustive).visibility(VisibilitySpec::RayTraced).build().unwrap();
+    assert!(r.clamp().is_none() && r.shader().is_none());
+    r.render(&setup.scene, &near, 0, 0.0).unwrap();
+    assert_eq!(r.clamp(), Some(g_near));
+    r.render(&setup.scene, &far, 1, 0.0).unwrap();
+    assert_eq!(r.clamp(), Some(g_near), "the clamp must not follow the camera");
+    let r = Renderer::builder(&setup.scene).vpls(64).clamp(Clamp::SceneArea).build().unwrap();
+    assert_eq!(r.clamp(), Some(GeometryClamp::for_scene_area(64, setup.scene.surface_area())));
+    assert!(r.shader().is_some());
 }

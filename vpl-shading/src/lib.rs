@@ -15,7 +15,7 @@
 //! and visibility is the crate `vpl-render`.
 //!
 //! The geometry term is clamped by the one rule the clamped path tracer also
-//! uses ([`GeometryClamp`]; default [`GeometryClamp::for_budget`]).
+//! uses ([`GeometryClamp`]; default [`GeometryClamp::for_view`]).
 //!
 //! ```
 //! use vpl_core::{GeometryClamp, IndirectShader, SceneSetup, Vpl, VplSet, VplVisibility};
@@ -33,13 +33,13 @@
 //! vpls.set(0, Some(Vpl { y: y.p + y.n * 1e-3, n: y.n, flux: vpl_core::glam::Vec3::ONE, id: 0, bounce: 1 }));
 //! let mut vis = RayTraced::default();
 //! vis.update(&setup.scene, &vpls);
-//! let clamp = GeometryClamp::for_budget(vpls.len(), setup.scene.surface_area());
+//! let clamp = GeometryClamp::for_view(vpls.len(), &setup.scene, &camera);
 //! let img = ExhaustiveShader { clamp: Some(clamp) }.shade(&gbuf, &vpls, &vis);
 //! assert!(img.mean()[0] > 0.0);
 //! ```
 //!
 //! [`GeometryClamp`]: vpl_core::GeometryClamp
-//! [`GeometryClamp::for_budget`]: vpl_core::GeometryClamp::for_budget
+//! [`GeometryClamp::for_view`]: vpl_core::GeometryClamp::for_view
 //!
 //! ## Build profile
 //!

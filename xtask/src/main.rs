@@ -261,7 +261,7 @@ fn write_readme(header: &str) -> Result<(), String> {
 
 const README_HEADER: &str = "# Results\n\nWritten by `cargo xtask reproduce` (and `cargo xtask merge` after a sharded run). \
 Each section comes from the newest run of its job; the wall times below are of those runs.\n\n\
-- [Table 1](table1/table1.md): |E| and |E′| of IR, RR, MIR, TCAS and SMC on five sequences, with Fig. 7 ([`table1/`](table1/))\n\
+- [Table 1](table1/table1.md): |E| and |E′| of IR, RR, MIR, TCAS and SMC on five stand-in sequences and two on real geometry (Sponza, Munich; where their models are present), three seeds each with 95 % confidence intervals, with Fig. 7 ([`table1/`](table1/))\n\
 - [Table 2](table2/table2.md): milliseconds per stage of an SMC frame\n\
 - [Figs. 8 and 9](figures/fig8.md): one frame by path tracing and by VPLs; shadow-map resolutions\n\
 - [Fig. 10](figures/fig10.md): error against the VPL budget\n\
@@ -402,7 +402,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
         }
         eprintln!(
-            "xtask: [table1] five sequences x five samplers and their ground truth ({} profile{})",
+            "xtask: [table1] seven sequences (five where the real scenes are absent) x five samplers x three seeds and their ground truth ({} profile{})",
             profile.name,
             shard.as_deref().map_or(String::new(), |s| format!(", shard {s}"))
         );

@@ -65,23 +65,26 @@ impl FromStr for PixelArg {
     }
 }
 
-/// `--clamp <value | auto | off>`.
+/// `--clamp <value | auto | area | off>`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ClampArg {
     /// No clamping.
     Off,
-    /// The default rule G_max = I / A ([`vpl_core::GeometryClamp::for_budget`]).
+    /// The default rule G_max = I / A_view ([`vpl_core::GeometryClamp::for_view`]).
     Auto,
+    /// G_max = I / A with A the scene's surface area ([`vpl_core::GeometryClamp::for_scene_area`]).
+    Area,
     /// Clamp the geometry term at this value (1/m²).
     Value(f32),
 }
 
 impl ClampArg {
-    /// The clamp for a budget of `vpls` VPLs in a scene of surface area `area`.
-    pub fn resolve(self, vpls: usize, area: f32) -> Option<vpl_core::GeometryClamp> {
+    /// The clamp for a budget of `vpls` VPLs in `scene` seen by `camera`.
+    pub fn resolve(self, vpls: usize, scene: &vpl_core::Scene, camera: &vpl_core::Camera) -> Option<vpl_core::GeometryClamp> {
         match self {
             ClampArg::Off => None,
-            ClampArg::Auto => Some(vpl_core::GeometryClamp::for_budget(vpls, area)),
+            ClampArg::Auto => Some(vpl_core::GeometryClamp::for_view(vpls, scene, camera)),
+            ClampArg::Area => Some(vpl_core::GeometryClamp::for_scene_area(vpls, scene.surface_area())),
             ClampArg::Value(v) => Some(vpl_core::GeometryClamp::new(v)),
         }
     }
@@ -96,9 +99,12 @@ impl FromStr for ClampArg {
         if s == "auto" {
             return Ok(ClampArg::Auto);
         }
+        if s == "area" {
+            return Ok(ClampArg::Area);
+        }
         match s.parse::<f32>() {
             Ok(v) if v.is_finite() && v > 0.0 => Ok(ClampArg::Value(v)),
-            _ => Err(format!("clamp '{s}' must be a positive number, 'auto' or 'off'")),
+            _ => Err(format!("clamp '{s}' must be a positive number, 'auto', 'area' or 'off'")),
         }
     }
 }
@@ -114,7 +120,13 @@ mod tests {
         assert!("10".parse::<Size>().is_err());
         assert_eq!("off".parse::<ClampArg>().unwrap(), ClampArg::Off);
         assert_eq!("2.5".parse::<ClampArg>().unwrap(), ClampArg::Value(2.5));
-        assert_eq!("auto".parse::<ClampArg>().unwrap().resolve(100, 4.0).unwrap().g_max, 25.0);
+        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let (scene, camera) = (&setup.scene, &setup.camera);
+        let area = "area".parse::<ClampArg>().unwrap().resolve(100, scene, camera).unwrap();
+        assert_eq!(area.g_max, 100.0 / scene.surface_area());
+        let view = "auto".parse::<ClampArg>().unwrap().resolve(100, scene, camera).unwrap();
+        assert_eq!(view, vpl_core::GeometryClamp::for_view(100, scene, camera));
+        assert!("areas".parse::<ClampArg>().is_err());
         assert!("-1".parse::<ClampArg>().is_err());
         assert_eq!("3,4".parse::<PixelArg>().unwrap(), PixelArg(3, 4));
         assert!("3".parse::<PixelArg>().is_err());

@@ -107,7 +107,8 @@ struct SceneArgs {
     /// Longest path in segments (Mitsuba 3's convention: 5 = direct + 3 indirect bounces).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
-    /// Geometry-term clamp: a value in 1/m², `auto` (G_max = I / scene area, with I from --vpls) or `off`.
+    /// Geometry-term clamp: a value in 1/m², `auto` (G_max = I / A_view, A_view the area the camera's
+    /// points cover, with I from --vpls), `area` (G_max = I / the scene's surface area) or `off`.
     /// Default: off for --method path, auto for --method vpl and progressive. The path tracer clamps
     /// the segment leaving the primary hit (§5.4 of the SMC paper), VPL shading the VPL-to-pixel
     /// segment, the progressive renderer the eye-vertex-to-VPL segment (its bound of G, §8 of
@@ -297,6 +298,10 @@ struct VplArgs {
     /// Leave interleaved shading unfiltered.
     #[arg(long)]
     no_filter: bool,
+    /// Bias compensation of the clamp (Kollig and Keller 2004): N gather rays per pixel add back
+    /// the light the clamp removed, so the image converges to the unclamped one (0: off).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    compensate: u32,
     /// Light samples per pixel for direct light.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
@@ -327,9 +332,9 @@ enum Command {
     /// Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
     /// G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
     BenchGpu(bench_gpu::Args),
-    /// Table 1 of the SMC paper (|E| and |E′| of eight tracked pixels over five sequences): run the
-    /// units of a shard into --out; without --shard, also merge them into table1.md, .csv, .json and
-    /// the Fig. 7 plots.
+    /// Table 1 of the SMC paper (|E| and |E′| of eight tracked pixels over seven sequences, with
+    /// confidence intervals over seeds and pixels): run the units of a shard into --out; without
+    /// --shard, also merge them into table1.md, .csv, .json and the Fig. 7 plots.
     Table1(table1::Args),
     /// Table 2 of the SMC paper: milliseconds per stage of an SMC frame on courtyard, office, atrium
     /// (2048 VPLs) and maze (512); table2.md, .csv, .json.
@@ -507,9 +512,16 @@ fn check_depth(max_depth: u32, vpls: usize) -> Res<()> {
 }
 
 /// The path tracer that `--max-depth`, `--mode` and `--clamp` describe (off by default).
-fn tracer(max_depth: u32, mode: ModeArg, clamp: Option<ClampArg>, vpls: usize, scene: &vpl_core::Scene) -> PathTracer {
+fn tracer(
+    max_depth: u32,
+    mode: ModeArg,
+    clamp: Option<ClampArg>,
+    vpls: usize,
+    scene: &vpl_core::Scene,
+    camera: &vpl_core::Camera,
+) -> PathTracer {
     let mut pt = PathTracer::new(max_depth, mode_of(mode));
-    pt.clamp = clamp.unwrap_or(ClampArg::Off).resolve(vpls, scene.surface_area());
+    pt.clamp = clamp.unwrap_or(ClampArg::Off).resolve(vpls, scene, camera);
     pt
 }
 
@@ -572,6 +584,11 @@ fn pipeline_spec(
             ShadingArg::Interleaved => ShadingSpec::Interleaved { filter: !v.no_filter },
         },
         clamp,
+        compensation: match (v.compensate, clamp) {
+            (0, _) => 0,
+            (_, None) => return Err("--compensate adds back what the clamp removes: it needs a clamp (--clamp is off)".into()),
+            (n, Some(_)) => n,
+        },
         mode: mode_of(mode),
         direct_samples: v.direct_samples,
         seed,

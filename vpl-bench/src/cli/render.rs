@@ -108,7 +108,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let (sc, camera) = load_frame(&scene, frame, size)?;
     let estimate = vpl_render::MemoryEstimate::path_tracer(&sc, camera.resolution);
     check_memory(&estimate, memory_limit)?;
-    let pt = tracer(max_depth, mode, clamp, vpls, &sc);
+    let pt = tracer(max_depth, mode, clamp, vpls, &sc, &camera);
     let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "),
@@ -172,7 +172,7 @@ fn render_vpl(
 ) -> Res<()> {
     let (sc, camera) = load_frame(scene, frame, size)?;
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area());
+    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera);
     let spec = pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;
@@ -195,7 +195,11 @@ fn render_vpl(
                 p.visibility().name(),
                 r.visibility.rebuilt,
                 r.visibility.memory_bytes as f64 / (1 << 20) as f64,
-                clamp.map_or("off".to_string(), |c| format!("G_max = {:.3} 1/m^2", c.g_max))
+                match (clamp, p.compensation()) {
+                    (None, _) => "off".to_string(),
+                    (Some(c), 0) => format!("G_max = {:.3} 1/m^2", c.g_max),
+                    (Some(c), n) => format!("G_max = {:.3} 1/m^2, compensated ({n} gather rays, {:.1} ms)", c.g_max, t.compensation_ms),
+                }
             );
         }
         eprintln!(
@@ -207,7 +211,7 @@ fn render_vpl(
             t.gbuffer_ms,
             t.sampling_ms,
             t.visibility_ms,
-            p.shader().name(),
+            p.shader().map_or("no", |s| s.name()),
             t.shading_ms,
             t.direct_ms,
             m[0],
@@ -287,7 +291,7 @@ fn render_progressive(
         vpl_paths: p.vpl_paths,
         caustic_paths: p.caustic_paths,
         culling,
-        clamp: clamp.unwrap_or(ClampArg::Auto).resolve(vpls, sc.surface_area()),
+        clamp: clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera),
         projection_maps: !p.no_projection_maps,
         indirect_caustics: !p.primary_caustics_only,
         spectral: !p.no_spectral,

@@ -69,7 +69,9 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         None => setup.camera.resolution,
     };
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, setup.scene.surface_area());
+    // The clamp of the whole run, from the view of its first frame (a moving camera keeps it).
+    let first = setup.camera_at_frame(range.start).map_err(|e| e.to_string())?.with_resolution(res).map_err(|e| e.to_string())?;
+    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &setup.scene, &first);
     let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;

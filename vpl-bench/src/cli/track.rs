@@ -34,7 +34,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     let pool = pool(threads)?;
     let (sc, camera) = load_frame(&scene, frame, size)?;
     check_memory(&vpl_render::MemoryEstimate::scene(&sc), memory_limit)?;
-    let pt = tracer(max_depth, mode, clamp, vpls, &sc);
+    let pt = tracer(max_depth, mode, clamp, vpls, &sc, &camera);
     let (w, h) = camera.resolution;
     if let Some(p) = pixels.iter().find(|p| p.0 >= w || p.1 >= h) {
         return Err(format!("--pixel {},{} is outside the {w}x{h} image", p.0, p.1));

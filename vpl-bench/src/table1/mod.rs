@@ -14,6 +14,7 @@
 
 pub mod report;
 pub mod rows;
+pub mod stats;
 
 use crate::metrics::{TemporalError, temporal_error, tone_mapped_luminance, tone_mapped_stderr};
 use crate::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
@@ -92,8 +93,12 @@ pub struct Table1Spec {
     pub max_depth: u32,
     /// Shadow-map side in texels (the paper's 128).
     pub shadow_map_res: u32,
-    /// Seed of every stream.
+    /// Seed of every stream: method runs use `seed`, `seed + 1`, …,
+    /// `seed + seeds − 1`; the ground truth and the bootstrap use `seed`.
     pub seed: u64,
+    /// Independent runs of every method (the confidence intervals' seeds).
+    #[serde(default = "one")]
+    pub seeds: u32,
     /// Where the VPL stages run (ground truth is always the CPU path tracer).
     #[serde(default)]
     pub backend: BackendKind,
@@ -133,6 +138,13 @@ impl Table1Spec {
     }
 }
 
+fn one() -> u32 {
+    1
+}
+
+/// Seeds per method in the quick and full profiles.
+pub const PROFILE_SEEDS: u32 = 3;
+
 /// The paper's ground-truth sample count per pixel (§5.2).
 pub const PAPER_TRUTH_SPP: u32 = 692_100;
 
@@ -156,8 +168,11 @@ impl Table1Spec {
         truth_spp: u32,
         frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, CoreError>,
     ) -> Result<Self, Table1Error> {
+        // Rows on real geometry whose models are not here are left out
+        // ([`skipped_rows`] says which and why; the report lists them).
         let rows = rows::rows()
             .iter()
+            .filter(|r| r.missing().is_none())
             .map(|r| {
                 let f = frames(r)?;
                 Ok(RowRun { id: r.id.to_string(), start: f.start, end: f.end })
@@ -172,6 +187,7 @@ impl Table1Spec {
             max_depth: 5,
             shadow_map_res: 128,
             seed: 0,
+            seeds: PROFILE_SEEDS,
             backend: BackendKind::Cpu,
         })
     }
@@ -204,16 +220,21 @@ impl Table1Spec {
         if self.truth_spp == 0 || self.size.0 == 0 || self.size.1 == 0 {
             return Err(Table1Error::Invalid("truth samples and image size must be positive".into()));
         }
+        if self.seeds == 0 || self.seeds > 64 {
+            return Err(Table1Error::Invalid(format!("{} seeds: a run needs 1 to 64", self.seeds)));
+        }
         Ok(())
     }
 
-    /// The units of the run: every (row, method) sequence, then every
+    /// The units of the run: every (row, method, seed) sequence, then every
     /// (row, frame) of ground truth.
     pub fn units(&self) -> Vec<Unit> {
         let mut u = Vec::new();
         for (r, _) in self.rows.iter().enumerate() {
             for (m, _) in self.methods.iter().enumerate() {
-                u.push(Unit::Method { row: r, method: m });
+                for seed in 0..self.seeds {
+                    u.push(Unit::Method { row: r, method: m, seed });
+                }
             }
         }
         for (r, run) in self.rows.iter().enumerate() {
@@ -227,7 +248,7 @@ impl Table1Spec {
     /// The file of `unit`, relative to the output folder.
     pub fn unit_file(&self, unit: Unit) -> String {
         match unit {
-            Unit::Method { row, method } => format!("units/{}/{}.json", self.rows[row].id, self.methods[method]),
+            Unit::Method { row, method, seed } => format!("units/{}/{}_seed{seed}.json", self.rows[row].id, self.methods[method]),
             Unit::Truth { row, frame } => format!("units/{}/truth_{frame:05}.json", self.rows[row].id),
         }
     }
@@ -247,15 +268,22 @@ pub fn row_ids() -> Vec<&'static str> {
     rows::rows().iter().map(|r| r.id).collect()
 }
 
+/// The rows that cannot run here, with the reason (a model that is not there).
+pub fn skipped_rows() -> Vec<(&'static str, String)> {
+    rows::rows().iter().filter_map(|r| r.missing().map(|why| (r.id, why))).collect()
+}
+
 /// One piece of work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Unit {
-    /// A sequence rendered with one method.
+    /// A sequence rendered with one method and one seed.
     Method {
         /// Index into [`Table1Spec::rows`].
         row: usize,
         /// Index into [`Table1Spec::methods`].
         method: usize,
+        /// Which of the run's seeds (0..[`Table1Spec::seeds`]).
+        seed: u32,
     },
     /// Ground truth of one frame of a sequence.
     Truth {
@@ -329,6 +357,9 @@ pub struct MethodUnit {
     pub row: String,
     /// Method.
     pub method: String,
+    /// The seed its renderer ran with.
+    #[serde(default)]
+    pub seed: u64,
     /// Frames rendered.
     pub frames: Vec<u32>,
     /// Indirect radiance per frame and tracked pixel.
@@ -456,12 +487,13 @@ pub fn run(
             continue;
         }
         match unit {
-            Unit::Method { row, method } => {
+            Unit::Method { row, method, seed } => {
                 let r = rows::row(&spec.rows[row].id).expect("validated");
                 let name = &spec.methods[method];
                 let base = done;
-                let u = run_method(registry, spec, &r, &spec.rows[row], name, &mut |f| {
-                    progress(&Progress { done: base + f, total, message: format!("{} {name}", r.id) });
+                let seed = spec.seed.wrapping_add(seed as u64);
+                let u = run_method(registry, spec, &r, &spec.rows[row], name, seed, &mut |f| {
+                    progress(&Progress { done: base + f, total, message: format!("{} {name} (seed {seed})", r.id) });
                 })?;
                 write_json(&path, &u)?;
             }
@@ -481,9 +513,9 @@ pub fn run(
 
 /// The renderer every method gets: indirect light only, the paper's depth,
 /// shadow maps, 4×4 interleaved shading with the cross-bilateral filter,
-/// the geometry clamp G_max = I / A, and IR with new paths every frame (the
+/// the geometry clamp G_max = I / A_view of the run's first frame, and IR with new paths every frame (the
 /// baseline without temporal coherence).
-pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: GeometryClamp) -> PipelineSpec {
+pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: GeometryClamp, seed: u64) -> PipelineSpec {
     let mut params = Params::new();
     params.offer("fresh-paths", true);
     PipelineSpec {
@@ -493,9 +525,10 @@ pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: Geomet
         visibility: VisibilitySpec::ShadowMaps(spec.shadow_map_res),
         shading: ShadingSpec::Interleaved { filter: true },
         clamp: Some(clamp),
+        compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,
-        seed: spec.seed,
+        seed,
         backend: spec.backend,
     }
 }
@@ -506,13 +539,17 @@ fn run_method(
     row: &Row,
     run: &RowRun,
     method: &str,
+    seed: u64,
     on_frame: &mut dyn FnMut(u64),
 ) -> Result<MethodUnit, Table1Error> {
     let start = Instant::now();
     let setup = row.setup()?;
-    let clamp = GeometryClamp::for_budget(row.vpls, setup.scene.surface_area());
-    let mut renderer =
-        pipeline_spec(spec, method, row.vpls, clamp).build(registry, &setup.scene).map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    // One clamp per run, from the view of its first frame (GeometryClamp::for_view).
+    let first = setup.camera_at_frame(run.start)?.with_resolution(spec.size)?;
+    let clamp = GeometryClamp::for_view(row.vpls, &setup.scene, &first);
+    let mut renderer = pipeline_spec(spec, method, row.vpls, clamp, seed)
+        .build(registry, &setup.scene)
+        .map_err(|e| Table1Error::Invalid(e.to_string()))?;
     renderer.backend().check_size(spec.size).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut k = 0u64;
     let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut renderer, &row.pixels(spec.size), None, &mut |_, _| {
@@ -524,6 +561,7 @@ fn run_method(
         settings: Some(UnitSettings::of(spec)),
         row: row.id.into(),
         method: method.into(),
+        seed,
         frames: Vec::new(),
         tracked: Vec::new(),
         moved: Vec::new(),
@@ -573,12 +611,27 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
 pub struct MethodResult {
     /// Method name.
     pub method: String,
-    /// |E| and |E′|.
+    /// |E|, |E′| and the bias over every seed, frame and tracked pixel.
     pub error: TemporalError,
-    /// Tone-mapped luminance per frame and tracked pixel.
-    pub luminance: Vec<Vec<f64>>,
-    /// Median VPL slots moved per frame (after the first).
+    /// Their 95 % confidence intervals ([`stats`]).
+    pub intervals: stats::Intervals,
+    /// The mean squared error split into bias² and noise (`None` with one seed).
+    pub split: Option<stats::ErrorSplit>,
+    /// |E| of each seed's run alone.
+    pub e_per_seed: Vec<f64>,
+    /// Tone-mapped luminance per seed, frame and tracked pixel.
+    pub luminance: Vec<Vec<Vec<f64>>>,
+    /// Median VPL slots moved per frame (after the first, over all seeds).
     pub median_moved: f64,
+}
+
+/// SMC against another method on one row: 95 % intervals of SMC − other.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    /// The other method.
+    pub method: String,
+    /// Intervals of the differences of |E|, |E′| and the bias.
+    pub smc_minus: stats::Intervals,
 }
 
 /// One row's results.
@@ -600,6 +653,8 @@ pub struct RowResult {
     pub truth_stderr: f64,
     /// Per method.
     pub methods: Vec<MethodResult>,
+    /// SMC against each other method (empty when SMC did not run).
+    pub comparisons: Vec<Comparison>,
 }
 
 /// The merged run: what `table1.json` holds.
@@ -638,24 +693,62 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
                 se_n += 1;
             }
         }
+        let pixels = row.tracked.len();
+        let draws = stats::Draws::new(spec.seeds as usize, pixels, spec.seed, ri as u64);
         let mut methods = Vec::new();
+        let mut sums = Vec::new();
         for (mi, name) in spec.methods.iter().enumerate() {
-            let path = dir.join(spec.unit_file(Unit::Method { row: ri, method: mi }));
-            let u: MethodUnit = read_json(&path)?;
-            check_unit(&path, &u.settings, &spec)?;
-            if u.frames.len() != truth.len() {
-                return Err(Table1Error::Unit(
-                    dir.join(spec.unit_file(Unit::Method { row: ri, method: mi })),
-                    "frame count differs from the spec".into(),
-                ));
+            let mut lum = Vec::new();
+            let mut err = Vec::new();
+            let mut moved = Vec::new();
+            let mut e_per_seed = Vec::new();
+            for seed in 0..spec.seeds {
+                let path = dir.join(spec.unit_file(Unit::Method { row: ri, method: mi, seed }));
+                let u: MethodUnit = read_json(&path)?;
+                check_unit(&path, &u.settings, &spec)?;
+                if u.frames.len() != truth.len() || u.tracked.iter().any(|f| f.len() != pixels) {
+                    return Err(Table1Error::Unit(path, "frame or pixel count differs from the spec".into()));
+                }
+                let l: Vec<Vec<f64>> =
+                    u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
+                e_per_seed.push(temporal_error(&l, &truth)?.e);
+                err.push(l.iter().zip(&truth).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<f64>>()).collect::<Vec<_>>());
+                lum.push(l);
+                moved.extend(u.moved.iter().skip(1).map(|&m| m as f64));
+                runs.push(u);
             }
-            let lum: Vec<Vec<f64>> =
-                u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
-            let error = temporal_error(&lum, &truth)?;
-            let median_moved = crate::stages::median(u.moved.iter().skip(1).map(|&m| m as f64).collect());
-            methods.push(MethodResult { method: name.clone(), error, luminance: lum, median_moved });
-            runs.push(u);
+            let series = stats::SeriesSums::new(&err).ok_or_else(|| Table1Error::Invalid(format!("{}: {name} has no errors", run.id)))?;
+            let point = series.point();
+            let frames = truth.len();
+            let seeds = spec.seeds as usize;
+            let error = TemporalError {
+                e: point.e,
+                e_prime: point.e_prime,
+                bias: point.bias,
+                count: seeds * frames * pixels,
+                count_prime: seeds * frames.saturating_sub(1) * pixels,
+            };
+            methods.push(MethodResult {
+                method: name.clone(),
+                error,
+                intervals: draws.intervals(&series),
+                split: stats::ErrorSplit::new(&err),
+                e_per_seed,
+                luminance: lum,
+                median_moved: crate::stages::median(moved),
+            });
+            sums.push(series);
         }
+        let comparisons = match spec.methods.iter().position(|m| m == "smc") {
+            Some(k) => spec
+                .methods
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != k)
+                .map(|(i, m)| Comparison { method: m.clone(), smc_minus: draws.differences(&sums[k], &sums[i]) })
+                .collect(),
+            None => Vec::new(),
+        };
         rows_out.push(RowResult {
             id: run.id.clone(),
             scene: row.scene.into(),
@@ -665,6 +758,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             truth,
             truth_stderr: if se_n > 0 { se_sum / se_n as f64 } else { 0.0 },
             methods,
+            comparisons,
         });
     }
     Ok((Table1Results { spec, rows: rows_out }, runs))

@@ -3,6 +3,7 @@
 //! run to run and so stay out of the other files).
 
 use super::rows::{self, PAPER_METHODS};
+use super::stats::{Interval, REPLICATES};
 use super::{MethodUnit, RowResult, Table1Error, Table1Results};
 use crate::plot::{Chart, Series, line_chart, method_color};
 use crate::stages::median;
@@ -30,11 +31,16 @@ fn paper_index(method: &str) -> Option<usize> {
     PAPER_METHODS.iter().position(|m| *m == method)
 }
 
-/// Our values of one metric for a row, bold where smallest.
-fn metric_cells(row: &RowResult, get: impl Fn(&super::MethodResult) -> f64) -> String {
-    let vals: Vec<f64> = row.methods.iter().map(&get).collect();
-    let best = vals.iter().copied().fold(f64::INFINITY, f64::min);
-    vals.iter().map(|&v| if v == best { format!(" **{v:.4}** |") } else { format!(" {v:.4} |") }).collect()
+/// Our values of one metric for a row with their 95 % intervals, bold where smallest.
+fn metric_cells(row: &RowResult, get: impl Fn(&super::MethodResult) -> (f64, Interval)) -> String {
+    let vals: Vec<(f64, Interval)> = row.methods.iter().map(&get).collect();
+    let best = vals.iter().map(|v| v.0).fold(f64::INFINITY, f64::min);
+    vals.iter()
+        .map(|(v, ci)| {
+            let value = if *v == best { format!("**{v:.4}**") } else { format!("{v:.4}") };
+            format!(" {value} [{:.4}, {:.4}] |", ci.lo, ci.hi)
+        })
+        .collect()
 }
 
 fn paper_cells(row: &RowResult, methods: &[String], vals: impl Fn(&rows::PaperRow) -> [f64; 4]) -> String {
@@ -59,12 +65,16 @@ pub fn markdown(r: &Table1Results) -> String {
     let mut md = String::from("# Table 1: error and temporal instability of the VPL samplers\n\n");
     let _ = writeln!(
         md,
-        "Hedman et al. 2017, §5.2, redone on the built-in scenes. Eight tracked pixels per sequence; indirect light only, \
+        "Hedman et al. 2017, §5.2, redone on the built-in scenes and on real geometry (`sponza`: Dabrovic Sponza with a \
+         point light moving along the nave; `munich`: Munich city blocks under a moving sun; scene files in `scenes/`). Eight tracked pixels per sequence; indirect light only, \
          luminance after Reinhard's operator L/(1+L); ground truth from the path tracer ({} samples per pixel and frame, \
          rays through the pixel centre); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
-         shading, the cross-bilateral filter and the clamp G_max = I / A; no temporal reprojection; max depth {} (three \
+         shading, the cross-bilateral filter and the clamp G_max = I / A_view of each run's first frame; no temporal reprojection; max depth {} (three \
          indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
-         Profile `{}`, {}×{} pixels, seed {}, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL). \
+         Profile `{}`, {}×{} pixels, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL). \
+         Every method ran {} times (seeds {}..{}); values are over all runs, frames and tracked pixels, with 95 % confidence \
+         intervals in brackets: a two-way percentile bootstrap ({} replicates) that resamples seeds and tracked pixels and keeps \
+         each pixel's series of frames whole (frames are correlated and |E′| needs consecutive ones). \
          Smallest value in bold; the paper's values (its Table 1) on the right.\n",
         s.truth_spp,
         s.shadow_map_res,
@@ -72,19 +82,27 @@ pub fn markdown(r: &Table1Results) -> String {
         s.profile,
         s.size.0,
         s.size.1,
-        s.seed,
         match s.backend {
             crate::pipeline::BackendKind::Cpu => "CPU",
             crate::pipeline::BackendKind::Gpu => "GPU",
-        }
+        },
+        s.seeds,
+        s.seed,
+        s.seed + s.seeds as u64 - 1,
+        REPLICATES
     );
+    let skipped = super::skipped_rows();
+    if !skipped.is_empty() {
+        let list: Vec<String> = skipped.iter().map(|(id, why)| format!("`{id}` ({why})")).collect();
+        let _ = writeln!(md, "Not run on this machine: {}.\n", list.join("; "));
+    }
     for (title, get, paper) in [
         (
             "Average |E|",
-            (|m: &super::MethodResult| m.error.e) as fn(&super::MethodResult) -> f64,
+            (|m: &super::MethodResult| (m.error.e, m.intervals.e)) as fn(&super::MethodResult) -> (f64, Interval),
             (|p: &rows::PaperRow| p.e) as fn(&rows::PaperRow) -> [f64; 4],
         ),
-        ("Average |E′|", |m| m.error.e_prime, |p| p.e_prime),
+        ("Average |E′|", |m| (m.error.e_prime, m.intervals.e_prime), |p| p.e_prime),
     ] {
         let _ = writeln!(md, "## {title}\n");
         let mut head = String::from("| sequence | stands in for | lights | VPLs | frames |");
@@ -118,7 +136,10 @@ pub fn markdown(r: &Table1Results) -> String {
         }
         md.push('\n');
     }
-    md.push_str("## Mean signed error (bias)\n\nThe mean of estimate − truth over frames and pixels: noise averages out here, a bias does not.\n\n| sequence |");
+    md.push_str(
+        "## Mean signed error\n\nThe mean of estimate − truth over runs, frames and pixels, with its 95 % interval: noise averages \
+         out here, a bias does not.\n\n| sequence |",
+    );
     for n in &names {
         let _ = write!(md, " {n} |");
     }
@@ -128,32 +149,71 @@ pub fn markdown(r: &Table1Results) -> String {
     for row in &r.rows {
         let _ = write!(md, "| `{}` |", row.id);
         for m in &row.methods {
-            let _ = write!(md, " {:+.4} |", m.error.bias);
+            let _ = write!(md, " {:+.4} [{:+.4}, {:+.4}] |", m.error.bias, m.intervals.bias.lo, m.intervals.bias.hi);
         }
         md.push('\n');
     }
     md.push('\n');
-    md.push_str("## The target: SMC lowest |E′| in every sequence, |E| no worse than MIR's\n\n| sequence | SMC \\|E′\\| | lowest other \\|E′\\| | lowest? | SMC \\|E\\| | MIR \\|E\\| | ≤ MIR? |\n| --- | ---: | ---: | --- | ---: | ---: | --- |\n");
+    if s.seeds >= 2 {
+        md.push_str(
+            "## How much of the error is bias and how much noise\n\nThe mean squared error of estimate − truth split per frame and \
+             pixel into the variance across seeds (noise) and the square of the seeds' mean error less its noise (bias²); the cells \
+             give the noise's share of the mean squared error, then √bias² and √noise. The ground truth's own error is the same \
+             for every seed and so counts as bias here (its size is the truth s.e. column above).\n\n| sequence |",
+        );
+        for n in &names {
+            let _ = write!(md, " {n} |");
+        }
+        md.push_str("\n| --- |");
+        md.push_str(&" ---: |".repeat(names.len()));
+        md.push('\n');
+        for row in &r.rows {
+            let _ = write!(md, "| `{}` |", row.id);
+            for m in &row.methods {
+                match m.split {
+                    Some(sp) => {
+                        let _ = write!(
+                            md,
+                            " {:.0} % noise ({:.4} / {:.4}) |",
+                            100.0 * sp.noise_share(),
+                            sp.bias2.max(0.0).sqrt(),
+                            sp.noise.sqrt()
+                        );
+                    }
+                    None => md.push_str(" – |"),
+                }
+            }
+            md.push('\n');
+        }
+        md.push('\n');
+    }
+    md.push_str(
+        "## The target: SMC lowest |E′| in every sequence, |E| no worse than MIR's\n\nDifferences SMC − other with their 95 % \
+         intervals from the same bootstrap draws (paired: the same seeds and pixels for both methods): significant when the \
+         interval excludes zero.\n\n| sequence | SMC \\|E′\\| | lowest other \\|E′\\| | SMC − it | SMC's \\|E′\\| | SMC \\|E\\| | MIR \\|E\\| | SMC − MIR | SMC's \\|E\\| against MIR's |\n\
+         | --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | --- |\n",
+    );
     for row in &r.rows {
         let find = |m: &str| row.methods.iter().find(|x| x.method == m);
         let Some(smc) = find("smc") else { continue };
+        let versus = |m: &str| row.comparisons.iter().find(|c| c.method == m).map(|c| c.smc_minus);
         let other = row.methods.iter().filter(|m| m.method != "smc").min_by(|a, b| a.error.e_prime.total_cmp(&b.error.e_prime));
         let (oname, ov) = other.map_or(("–".to_string(), f64::NAN), |o| (display_name(&o.method), o.error.e_prime));
-        let lowest = other.is_none_or(|o| smc.error.e_prime < o.error.e_prime);
+        let d_prime = other.and_then(|o| versus(&o.method)).map(|d| d.e_prime);
         let mir = find("mir-resample").map(|m| m.error.e);
+        let d_e = versus("mir-resample").map(|d| d.e);
+        let ci = |d: Option<Interval>| d.map_or("–".to_string(), |d| format!("[{:+.4}, {:+.4}]", d.lo, d.hi));
         let _ = writeln!(
             md,
-            "| `{}` | {:.4} | {ov:.4} ({oname}) | {} | {:.4} | {} | {} |",
+            "| `{}` | {:.4} | {ov:.4} ({oname}) | {} | {} | {:.4} | {} | {} | {} |",
             row.id,
             smc.error.e_prime,
-            if lowest { "yes" } else { "**no**" },
+            ci(d_prime),
+            d_prime.map_or("–", |d| d.sign().words()),
             smc.error.e,
             mir.map_or("–".into(), |v| format!("{v:.4}")),
-            match mir {
-                Some(v) if smc.error.e <= v => "yes",
-                Some(_) => "**no**",
-                None => "–",
-            }
+            ci(d_e),
+            d_e.map_or("–", |d| d.sign().words()),
         );
     }
     md.push_str("\n## Tracked pixels\n\n");
@@ -171,25 +231,36 @@ pub fn markdown(r: &Table1Results) -> String {
 /// `table1.csv`: one line per sequence and method.
 pub fn csv(r: &Table1Results) -> String {
     let mut s = String::from(
-        "sequence,scene,vpls,frame_start,frame_end,method,e,e_prime,bias,count,count_prime,truth_stderr,median_moved,paper_e,paper_e_prime\n",
+        "sequence,scene,vpls,frame_start,frame_end,method,seeds,e,e_lo,e_hi,e_prime,e_prime_lo,e_prime_hi,bias,bias_lo,bias_hi,noise_share,\
+         e_per_seed,count,count_prime,truth_stderr,median_moved,paper_e,paper_e_prime\n",
     );
     for row in &r.rows {
         let p = rows::row(&row.id).expect("known row").paper;
         for m in &row.methods {
             let (pe, pp) =
                 paper_index(&m.method).map_or((String::new(), String::new()), |i| (p.e[i].to_string(), p.e_prime[i].to_string()));
+            let ci = m.intervals;
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.6},{},{pe},{pp}",
+                "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{},{},{:.6},{},{pe},{pp}",
                 row.id,
                 row.scene,
                 row.vpls,
                 row.frames.0,
                 row.frames.1,
                 m.method,
+                m.luminance.len(),
                 m.error.e,
+                ci.e.lo,
+                ci.e.hi,
                 m.error.e_prime,
+                ci.e_prime.lo,
+                ci.e_prime.hi,
                 m.error.bias,
+                ci.bias.lo,
+                ci.bias.hi,
+                m.split.map_or(String::new(), |sp| format!("{:.4}", sp.noise_share())),
+                m.e_per_seed.iter().map(|e| format!("{e:.6}")).collect::<Vec<_>>().join(";"),
                 m.error.count,
                 m.error.count_prime,
                 row.truth_stderr,
@@ -202,14 +273,15 @@ pub fn csv(r: &Table1Results) -> String {
 
 /// `runs.csv`: median milliseconds per stage and wall time of each unit.
 pub fn runs_csv(runs: &[MethodUnit]) -> String {
-    let mut s = String::from("sequence,method,frames,seconds,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,total_ms\n");
+    let mut s = String::from("sequence,method,seed,frames,seconds,gbuffer_ms,sampling_ms,visibility_ms,shading_ms,total_ms\n");
     for u in runs {
         let med = |i: usize| median(u.ms.iter().skip(1).map(|m| m[i]).collect());
         let _ = writeln!(
             s,
-            "{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            "{},{},{},{},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2}",
             u.row,
             u.method,
+            u.seed,
             u.frames.len(),
             u.seconds,
             med(0),
@@ -223,9 +295,10 @@ pub fn runs_csv(runs: &[MethodUnit]) -> String {
 }
 
 /// Fig. 7: the tracked pixel's luminance over time, per method against
-/// ground truth, for the rows of [`FIG7_ROWS`] in the run.
+/// ground truth, for the rows of [`FIG7_ROWS`] in the run: one line per
+/// seed in the method's colour, so the spread across runs shows.
 fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
-    let mut data = String::from("sequence,pixel,x,y,frame,time,method,luminance\n");
+    let mut data = String::from("sequence,pixel,x,y,frame,time,method,seed,luminance\n");
     for row in r.rows.iter().filter(|row| FIG7_ROWS.contains(&row.id.as_str())) {
         let def = rows::row(&row.id).expect("known row");
         let k = def.fig7_pixel;
@@ -238,22 +311,24 @@ fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
             bold: true,
             markers: false,
         }];
-        for m in &row.methods {
-            series.push(Series {
-                label: display_name(&m.method),
-                points: m.luminance.iter().enumerate().map(|(i, f)| (time(i), f[k])).collect(),
-                color: method_color(&m.method),
-                bold: false,
-                markers: row.truth.len() < 40,
-            });
-        }
         let ((x, y), label) = &row.pixels[k];
-        for s in &series {
-            for (i, (t, l)) in s.points.iter().enumerate() {
-                let _ = writeln!(data, "{},{k},{x},{y},{},{t:.4},{},{l:.6}", row.id, t0 as usize + i, s.label);
+        for (i, (t, l)) in series[0].points.iter().enumerate() {
+            let _ = writeln!(data, "{},{k},{x},{y},{},{t:.4},ground truth,,{l:.6}", row.id, t0 as usize + i);
+        }
+        for m in &row.methods {
+            for (seed, lum) in m.luminance.iter().enumerate() {
+                let points: Vec<(f64, f64)> = lum.iter().enumerate().map(|(i, f)| (time(i), f[k])).collect();
+                let name = display_name(&m.method);
+                for (i, (t, l)) in points.iter().enumerate() {
+                    let _ = writeln!(data, "{},{k},{x},{y},{},{t:.4},{name},{},{l:.6}", row.id, t0 as usize + i, r.spec.seed + seed as u64);
+                }
+                // The legend names a method once.
+                let label = if seed == 0 { name } else { String::new() };
+                series.push(Series { label, points, color: method_color(&m.method), bold: false, markers: row.truth.len() < 40 });
             }
         }
-        let title = format!("{} ({} VPLs), pixel {k} ({x}, {y}): {label}", row.id, row.vpls);
+        let runs = if r.spec.seeds > 1 { format!(", {} seeds each", r.spec.seeds) } else { String::new() };
+        let title = format!("{} ({} VPLs{runs}), pixel {k} ({x}, {y}): {label}", row.id, row.vpls);
         let chart = Chart { title: &title, x_label: "seconds", y_label: "luminance (Reinhard)", log: (false, false), size: (960, 420) };
         line_chart(&dir.join(format!("fig7_{}.png", row.id)), &chart, &series)?;
     }

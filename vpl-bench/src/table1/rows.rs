@@ -1,9 +1,13 @@
-//! The five sequences of the SMC paper's Table 1 on the built-in scenes,
-//! their tracked pixels, and the paper's figures for them.
+//! The sequences of the SMC paper's Table 1: five on the built-in scenes
+//! and two on real geometry (the scene files `scenes/sponza-dabrovic.toml`
+//! and `scenes/city-munich.toml`, whose models live outside the repository
+//! and are skipped where they are not), their tracked pixels, and the
+//! paper's figures for them.
 
 use std::ops::Range;
+use std::path::PathBuf;
 use vpl_core::scene_file::LightKeySpec;
-use vpl_core::{CoreError, SceneSetup};
+use vpl_core::{CoreError, SceneFile, SceneSetup};
 
 /// A tracked pixel: a fixed position in the image (as a fraction of its
 /// width and height, so any image size maps it to the same place) and what
@@ -49,8 +53,11 @@ pub const PAPER_METHODS: [&str; 4] = ["mir-resample", "ir", "tcas", "smc"];
 pub struct Row {
     /// Short name (file names, `--scene`).
     pub id: &'static str,
-    /// Built-in scene.
+    /// Scene name in tables: the built-in scene, or the scene file's stem.
     pub scene: &'static str,
+    /// The scene file (relative to [`scenes_dir`]) of a row on real
+    /// geometry; `None`: the built-in scene `scene`.
+    pub file: Option<&'static str>,
     /// VPL budget I.
     pub vpls: usize,
     /// The frames `--quick` renders: consecutive frames where the view or
@@ -74,7 +81,7 @@ const fn px(u: f32, v: f32, label: &'static str) -> TrackedSpec {
 const COURTYARD_PIXELS: [TrackedSpec; 8] = [
     px(0.50, 0.92, "street just ahead: sunlit or in shadow as the walk goes"),
     px(0.15, 0.70, "left wall, low: lit by the sunlit street"),
-    px(0.20, 0.30, "left wall, high: far from the street, indirect only"),
+    px(0.06, 0.42, "left wall, high: far from the street, indirect only"),
     px(0.80, 0.55, "right-hand facades across the street"),
     px(0.50, 0.62, "end of the street: the square appears"),
     px(0.75, 0.85, "street, right side"),
@@ -85,12 +92,36 @@ const COURTYARD_PIXELS: [TrackedSpec; 8] = [
 /// The moving sun: from low in the east through high south to the west over 24 s.
 const MOVING_SUN: [(f32, [f32; 3]); 3] = [(0.0, [0.75, -0.3, -0.6]), (12.0, [0.1, -0.55, -0.83]), (24.0, [-0.6, -0.42, -0.68])];
 
-/// The five rows in the paper's order.
+/// The folder of the committed scene files (`scenes/` of the repository).
+pub fn scenes_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+/// The paper's dynamic Crytek Sponza row, which both `atrium` and `sponza` stand in for.
+const PAPER_SPONZA: PaperRow = PaperRow {
+    scene: "Crytek Sponza",
+    lights: "1 (dynamic)",
+    seconds: 20.0,
+    e: [0.0288, 0.0215, 0.0352, 0.0962],
+    e_prime: [0.0072, 0.0044, 0.0027, 0.0014],
+};
+
+/// The paper's Epic Citadel row with a moving sun, which both `courtyard-sun` and `munich` stand in for.
+const PAPER_CITADEL_SUN: PaperRow = PaperRow {
+    scene: "Epic Citadel",
+    lights: "1 (dynamic)",
+    seconds: 21.0,
+    e: [0.0246, 0.0892, 0.0650, 0.0240],
+    e_prime: [0.0129, 0.0323, 0.0198, 0.0071],
+};
+
+/// The rows: the paper's five in its order, then the two on real geometry.
 pub fn rows() -> Vec<Row> {
     vec![
         Row {
             id: "office",
             scene: "office",
+            file: None,
             vpls: 2048,
             quick_frames: 600..608,
             tracked: [
@@ -116,6 +147,7 @@ pub fn rows() -> Vec<Row> {
         Row {
             id: "courtyard",
             scene: "courtyard",
+            file: None,
             vpls: 2048,
             quick_frames: 300..308,
             tracked: COURTYARD_PIXELS,
@@ -132,6 +164,7 @@ pub fn rows() -> Vec<Row> {
         Row {
             id: "maze",
             scene: "maze",
+            file: None,
             vpls: 512,
             quick_frames: 300..308,
             tracked: [
@@ -157,6 +190,7 @@ pub fn rows() -> Vec<Row> {
         Row {
             id: "atrium",
             scene: "atrium",
+            file: None,
             vpls: 2048,
             quick_frames: 240..248,
             tracked: [
@@ -171,29 +205,58 @@ pub fn rows() -> Vec<Row> {
             ],
             fig7_pixel: 3,
             sun_keys: &[],
-            paper: PaperRow {
-                scene: "Crytek Sponza",
-                lights: "1 (dynamic)",
-                seconds: 20.0,
-                e: [0.0288, 0.0215, 0.0352, 0.0962],
-                e_prime: [0.0072, 0.0044, 0.0027, 0.0014],
-            },
+            paper: PAPER_SPONZA,
         },
         Row {
             id: "courtyard-sun",
             scene: "courtyard",
+            file: None,
             vpls: 2048,
             quick_frames: 300..308,
             tracked: COURTYARD_PIXELS,
             fig7_pixel: 1,
             sun_keys: &MOVING_SUN,
-            paper: PaperRow {
-                scene: "Epic Citadel",
-                lights: "1 (dynamic)",
-                seconds: 21.0,
-                e: [0.0246, 0.0892, 0.0650, 0.0240],
-                e_prime: [0.0129, 0.0323, 0.0198, 0.0071],
-            },
+            paper: PAPER_CITADEL_SUN,
+        },
+        Row {
+            id: "sponza",
+            scene: "sponza-dabrovic",
+            file: Some("sponza-dabrovic.toml"),
+            vpls: 2048,
+            quick_frames: 150..158,
+            tracked: [
+                px(0.50, 0.85, "nave floor (the light passes over it)"),
+                px(0.05, 0.50, "near left arch (indirect)"),
+                px(0.30, 0.60, "left arcade, behind the columns (indirect)"),
+                px(0.70, 0.45, "right arcade, under the gallery (indirect only)"),
+                px(0.50, 0.55, "far end of the nave"),
+                px(0.40, 0.25, "left upper gallery"),
+                px(0.85, 0.70, "near right pillar, in its own shade"),
+                px(0.20, 0.90, "floor under the left arcade (indirect corner)"),
+            ],
+            fig7_pixel: 3,
+            sun_keys: &[],
+            paper: PAPER_SPONZA,
+        },
+        Row {
+            id: "munich",
+            scene: "city-munich",
+            file: Some("city-munich.toml"),
+            vpls: 2048,
+            quick_frames: 150..158,
+            tracked: [
+                px(0.50, 0.92, "near roof (directly lit)"),
+                px(0.15, 0.55, "roofs on the left"),
+                px(0.75, 0.55, "facades on the right, in shadow (indirect only)"),
+                px(0.68, 0.30, "the tower"),
+                px(0.40, 0.45, "between the blocks"),
+                px(0.85, 0.80, "near building on the right, shaded wall"),
+                px(0.30, 0.70, "roofs and gaps on the left"),
+                px(0.55, 0.60, "central block's facade"),
+            ],
+            fig7_pixel: 2,
+            sun_keys: &[],
+            paper: PAPER_CITADEL_SUN,
         },
     ]
 }
@@ -204,9 +267,29 @@ pub fn row(id: &str) -> Option<Row> {
 }
 
 impl Row {
-    /// The scene with this row's animation (the built-in one, with the sun
-    /// keys of a moving-sun row added).
+    /// Why this row cannot run here (its model is not where its scene file
+    /// names it), or `None`.
+    pub fn missing(&self) -> Option<String> {
+        let file = self.file?;
+        let path = scenes_dir().join(file);
+        let described = match SceneFile::read(&path) {
+            Ok(f) => f,
+            Err(e) => return Some(format!("{}: {e}", path.display())),
+        };
+        let obj = described.geometry.obj?;
+        let model = scenes_dir().join(&obj);
+        (!model.is_file()).then(|| format!("its model {} is not there", model.display()))
+    }
+
+    /// The scene with this row's animation: the built-in one (with the sun
+    /// keys of a moving-sun row added) or the row's scene file.
     pub fn setup(&self) -> Result<SceneSetup, CoreError> {
+        if let Some(file) = self.file {
+            if let Some(why) = self.missing() {
+                return Err(CoreError::Invalid(format!("sequence {}: {why}", self.id)));
+            }
+            return SceneSetup::load(&scenes_dir().join(file).to_string_lossy());
+        }
         let setup = SceneSetup::builtin(self.scene)?;
         if self.sun_keys.is_empty() {
             return Ok(setup);
@@ -234,11 +317,23 @@ mod tests {
     #[test]
     fn rows_load_and_their_pixels_are_distinct_and_inside() {
         let rows = rows();
-        assert_eq!(rows.len(), 5);
+        assert_eq!(rows.len(), 7);
         for r in &rows {
-            let n = r.frame_count().unwrap();
+            if let Some(why) = r.missing() {
+                assert!(r.file.is_some(), "{}: a built-in row is always there", r.id);
+                eprintln!("skipped {}: {why}", r.id);
+                continue;
+            }
+            let setup = r.setup().unwrap();
+            let n = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
             assert!(r.quick_frames.end <= n && r.quick_frames.len() >= 2, "{}", r.id);
             let mut p = r.pixels((320, 240));
+            // Every tracked pixel sees a surface that reflects light (not the sky).
+            let camera = setup.camera_at_frame(r.quick_frames.start).unwrap().with_resolution((320, 240)).unwrap();
+            for (t, &(x, y)) in r.tracked.iter().zip(&p) {
+                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, (0.5, 0.5));
+                assert!(setup.scene.reflecting_hit(&ray).is_some(), "{}: pixel {x},{y} ({}) sees nothing", r.id, t.label);
+            }
             p.sort();
             p.dedup();
             assert_eq!(p.len(), 8, "{}", r.id);

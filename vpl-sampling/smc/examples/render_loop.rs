@@ -34,7 +34,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let setup = SceneSetup::load("office")?;
     let vpls = 256;
     let mut smc = SmcSampler::new(SmcConfig { vpls, warmup: 20, m_max: 8, ..SmcConfig::default() })?;
-    let clamp = GeometryClamp::for_budget(vpls, setup.scene.surface_area());
+    // The toolkit's default clamp, from the view of the first frame.
+    let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     // The sampler casts its own camera rays: it needs no G-buffer.
     let gbuffer = GBuffer::empty();
     for index in 0..4u32 {

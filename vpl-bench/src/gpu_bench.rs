@@ -60,7 +60,7 @@ pub struct GpuBenchRow {
 /// Times `frames` frames (after one untimed warm-up frame, which compiles
 /// the kernels and renders every map) of `scene`'s sequence from frame
 /// `start` at `size` with `vpls` SMC VPLs, 128² maps, 4×4 interleaved
-/// shading with the filter and G_max = I / A. Every step is waited for on
+/// shading with the filter and G_max = I / A_view. Every step is waited for on
 /// the device, so the times add up.
 pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<GpuBenchRow, BenchError> {
     let setup = SceneSetup::load(scene)?;
@@ -68,7 +68,7 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
     let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?;
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
-    let clamp = GeometryClamp::for_scene_area(vpls, setup.scene.surface_area());
+    let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
     let mut rows: Vec<[f64; 14]> = Vec::new();
     let mut first = (0.0, 0);

@@ -110,7 +110,7 @@ pub struct Fig7Settings {
     pub reference_spp: u32,
     /// Caustic photon paths per pass.
     pub caustic_paths: usize,
-    /// VPL budget I of the geometry clamp G ≤ I / A (`None`: unclamped).
+    /// VPL budget I of the geometry clamp G ≤ I / A_view (`None`: unclamped).
     pub clamp_budget: Option<usize>,
     /// Seed.
     pub seed: u64,
@@ -154,7 +154,7 @@ pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig
     let setup = SceneSetup::load(&s.scene)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let scene = &setup.scene;
-    let clamp = s.clamp_budget.map(|i| GeometryClamp::for_scene_area(i, scene.surface_area()));
+    let clamp = s.clamp_budget.map(|i| GeometryClamp::for_view(i, scene, &camera));
     let config = |seed: u64| ProgressiveConfig { seed, caustic_paths: s.caustic_paths, clamp, ..ProgressiveConfig::default() };
     progress(&format!("path-traced reference, {} spp", s.reference_spp));
     let (reference, reference_se, _) = pt_reference(scene, &camera, s.reference_spp, s.seed ^ 0x5eed)?;
@@ -246,7 +246,7 @@ pub struct Fig8Settings {
     /// Folder of the Mitsuba `cornell` references (`reference_path_d5.exr`), if any.
     pub mitsuba: Option<PathBuf>,
     /// The VPL budget I of the progressive renderer's geometry clamp
-    /// G ≤ I / A (the toolkit's rule, [`GeometryClamp::for_scene_area`]); the
+    /// G ≤ I / A_view (the toolkit's rule, [`GeometryClamp::for_view`]); the
     /// unclamped renderer runs too.
     pub clamp_budget: usize,
     /// Seed.
@@ -302,7 +302,7 @@ pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn
         }
     };
     let scene = &setup.scene;
-    let clamp = GeometryClamp::for_scene_area(s.clamp_budget, scene.surface_area());
+    let clamp = GeometryClamp::for_view(s.clamp_budget, scene, &camera);
     let run = |clamp: Option<GeometryClamp>| -> Result<(Image, u64, f64), CoreError> {
         progress(&format!("{scene_name}: progressive ({}), {} s", if clamp.is_some() { "clamped" } else { "unclamped" }, s.seconds));
         let mut r = Progressive::new(scene, camera.clone(), ProgressiveConfig { seed: s.seed, clamp, ..ProgressiveConfig::default() })
@@ -375,7 +375,7 @@ pub fn report(fig7: Option<&Fig7>, fig8: &[Fig8Row], seconds: f64, prefix: &str)
             s.size.1,
             s.caustic_paths,
             match s.clamp_budget {
-                Some(i) => format!("geometry term clamped at I / A with I = {i}"),
+                Some(i) => format!("geometry term clamped at I / A_view with I = {i}"),
                 None => "no clamp".to_string(),
             },
             f.passes_per_second,
@@ -405,7 +405,7 @@ pub fn report(fig7: Option<&Fig7>, fig8: &[Fig8Row], seconds: f64, prefix: &str)
     if !fig8.is_empty() {
         md.push_str(&format!(
             "### Fig. 8: equal time against path tracing\n\nEach method renders for {seconds} s on the same threads: the path tracer (NEE + MIS, max depth 5) \
-             one sample per pixel at a time, the progressive renderer pass after pass, once with the geometry term clamped at G ≤ I / A (its default, as the paper \
+             one sample per pixel at a time, the progressive renderer pass after pass, once with the geometry term clamped at G ≤ I / A_view (its default; the paper \
              bounds G, §8) and once unclamped (unbiased). RMSE against the reference, its noise removed, over the pixels that see no light source directly \
              (a light seen directly is 10-100 times brighter than the rest, and its anti-aliased edge pixels, which measure pixel sampling rather than light \
              transport, would dominate the RMSE). Ratio = RMSE of path tracing / RMSE of the progressive renderer (above 1: the progressive renderer is closer).\n\n\

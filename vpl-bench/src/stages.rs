@@ -73,7 +73,7 @@ pub fn bench_stages(name: &str, size: (u32, u32), vpls: usize, repeat: u32) -> R
         }
         sm.update(scene, &set).rebuilt
     });
-    let mut shader = InterleavedShader::new(Some(GeometryClamp::for_scene_area(vpls, scene.surface_area())), 0);
+    let mut shader = InterleavedShader::new(Some(GeometryClamp::for_view(vpls, scene, &camera)), 0);
     let mut gathers = Vec::new();
     let mut filters = Vec::new();
     for _ in 0..repeat {

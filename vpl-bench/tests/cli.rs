@@ -9,11 +9,40 @@ fn vpl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_vpl"))
 }
 
-fn scratch(name: &str) -> PathBuf {
+/// A fresh folder under the system's temporary folder, removed when the
+/// test that made it ends (passing or failing).
+struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn scratch(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("vpl-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
@@ -83,6 +112,8 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--vpls", "0"], "vpls");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--visibility", "magic"], "magic");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--direct-samples", "0"], "direct-samples");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--clamp", "off", "--compensate", "2"], "--compensate");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--clamp", "areas"], "'auto', 'area' or 'off'");
     // A missing MTL is named in a warning line before the error.
     let o = vpl().args(["render", "--scene", &nomtl, "--out"]).arg(d.join("x.exr")).output().unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.mtl"));
@@ -166,7 +197,7 @@ fn track_prints_csv_with_standard_errors() {
 #[test]
 fn vpl_method_renders_with_both_visibilities_and_shadings() {
     let d = scratch("vplmethod");
-    for (vis, shading) in [("shadowmap", "interleaved"), ("raytrace", "exhaustive")] {
+    for (vis, shading, compensate) in [("shadowmap", "interleaved", "0"), ("raytrace", "exhaustive", "2")] {
         let out = d.join(format!("{vis}.exr"));
         let o = vpl()
             .args([
@@ -185,6 +216,8 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
                 shading,
                 "--shadowmap-res",
                 "32",
+                "--compensate",
+                compensate,
                 "--out",
             ])
             .arg(&out)
@@ -193,6 +226,7 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{vis}: {err}");
         assert!(err.contains("VPLs stored") && err.contains("mean RGB"), "{err}");
+        assert_eq!(err.contains("compensated (2 gather rays"), compensate == "2", "{err}");
         let img = vpl_core::Image::read_exr(&out).unwrap();
         assert!(img.mean()[0] > 0.05, "{vis}: {:?}", img.mean());
         assert!(d.join(format!("{vis}.png")).exists());
@@ -259,7 +293,7 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
     let out = dir.join("t1");
     let out_s = out.to_string_lossy().into_owned();
     for (args, needle) in [
-        (vec!["table1", "--scene", "sponza", "--out", &out_s], "unknown sequence 'sponza'"),
+        (vec!["table1", "--scene", "sponza-crytek", "--out", &out_s], "unknown sequence 'sponza-crytek'"),
         (vec!["table1", "--methods", "nope", "--out", &out_s], "unknown method 'nope'"),
         (vec!["table1", "--frames", "5000..5001", "--out", &out_s], "do not fit"),
         (vec!["table1", "--shard", "2/2", "--out", &out_s], "index must be below"),

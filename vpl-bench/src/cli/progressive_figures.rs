@@ -43,7 +43,7 @@ pub(super) struct Args {
     /// Which figures: 7, 8 or both.
     #[arg(long, value_delimiter = ',', default_value = "7,8")]
     only: Vec<u32>,
-    /// VPL budget I of the progressive renderer's geometry clamp G ≤ I / A.
+    /// VPL budget I of the progressive renderer's geometry clamp G ≤ I / A_view.
     #[arg(long, default_value_t = 2048)]
     vpls: usize,
     /// Seed.

@@ -58,6 +58,25 @@ fn paper_cells(row: &RowResult, methods: &[String], vals: impl Fn(&rows::PaperRo
         .collect()
 }
 
+/// A table of one cell per sequence and method, then a blank line.
+fn method_table(md: &mut String, names: &[String], r: &Table1Results, cell: impl Fn(&super::MethodResult) -> String) {
+    md.push_str("| sequence |");
+    for n in names {
+        let _ = write!(md, " {n} |");
+    }
+    md.push_str("\n| --- |");
+    md.push_str(&" ---: |".repeat(names.len()));
+    md.push('\n');
+    for row in &r.rows {
+        let _ = write!(md, "| `{}` |", row.id);
+        for m in &row.methods {
+            let _ = write!(md, " {} |", cell(m));
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+}
+
 /// `table1.md`.
 pub fn markdown(r: &Table1Results) -> String {
     let s = &r.spec;
@@ -138,54 +157,20 @@ pub fn markdown(r: &Table1Results) -> String {
     }
     md.push_str(
         "## Mean signed error\n\nThe mean of estimate − truth over runs, frames and pixels, with its 95 % interval: noise averages \
-         out here, a bias does not.\n\n| sequence |",
+         out here, a bias does not.\n\n",
     );
-    for n in &names {
-        let _ = write!(md, " {n} |");
-    }
-    md.push_str("\n| --- |");
-    md.push_str(&" ---: |".repeat(names.len()));
-    md.push('\n');
-    for row in &r.rows {
-        let _ = write!(md, "| `{}` |", row.id);
-        for m in &row.methods {
-            let _ = write!(md, " {:+.4} [{:+.4}, {:+.4}] |", m.error.bias, m.intervals.bias.lo, m.intervals.bias.hi);
-        }
-        md.push('\n');
-    }
-    md.push('\n');
+    method_table(&mut md, &names, r, |m| format!("{:+.4} [{:+.4}, {:+.4}]", m.error.bias, m.intervals.bias.lo, m.intervals.bias.hi));
     if s.seeds >= 2 {
         md.push_str(
             "## How much of the error is bias and how much noise\n\nThe mean squared error of estimate − truth split per frame and \
              pixel into the variance across seeds (noise) and the square of the seeds' mean error less its noise (bias²); the cells \
              give the noise's share of the mean squared error, then √bias² and √noise. The ground truth's own error is the same \
-             for every seed and so counts as bias here (its size is the truth s.e. column above).\n\n| sequence |",
+             for every seed and so counts as bias here (its size is the truth s.e. column above).\n\n",
         );
-        for n in &names {
-            let _ = write!(md, " {n} |");
-        }
-        md.push_str("\n| --- |");
-        md.push_str(&" ---: |".repeat(names.len()));
-        md.push('\n');
-        for row in &r.rows {
-            let _ = write!(md, "| `{}` |", row.id);
-            for m in &row.methods {
-                match m.split {
-                    Some(sp) => {
-                        let _ = write!(
-                            md,
-                            " {:.0} % noise ({:.4} / {:.4}) |",
-                            100.0 * sp.noise_share(),
-                            sp.bias2.max(0.0).sqrt(),
-                            sp.noise.sqrt()
-                        );
-                    }
-                    None => md.push_str(" – |"),
-                }
-            }
-            md.push('\n');
-        }
-        md.push('\n');
+        method_table(&mut md, &names, r, |m| match m.split {
+            Some(sp) => format!("{:.0} % noise ({:.4} / {:.4})", 100.0 * sp.noise_share(), sp.bias2.max(0.0).sqrt(), sp.noise.sqrt()),
+            None => "–".into(),
+        });
     }
     md.push_str(
         "## The target: SMC lowest |E′| in every sequence, |E| no worse than MIR's\n\nDifferences SMC − other with their 95 % \

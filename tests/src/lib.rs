@@ -36,6 +36,15 @@ pub fn exhaustive_rt(scene: &Scene, gbuf: &GBuffer, set: &VplSet, clamp: Option<
     vpl_shading::ExhaustiveShader { clamp }.shade(gbuf, set, &vis)
 }
 
+/// Mean of `xs` and the standard error of that mean (sample variance with
+/// n − 1; at least two values).
+pub fn mean_se(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let m = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}
+
 /// Mitsuba's indirect reference of `cornell` (256×256) box-filtered to 64×64.
 pub fn mitsuba_indirect_64() -> Image {
     let full = Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).expect("the Mitsuba indirect reference");

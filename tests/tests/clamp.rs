@@ -8,6 +8,7 @@ use vpl_core::{Camera, GeometryClamp, Image, Scene, SceneSetup};
 use vpl_pathtrace::{Footprint, Mode, PathTracer, RenderSettings, render, track_with};
 use vpl_render::compensation::{Compensation, compensate};
 use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
+use vpl_tests::mean_se;
 
 /// Pixels x0..x1 × y0..y1 as (x0, y0, x1, y1).
 type Region = (u32, u32, u32, u32);
@@ -62,14 +63,6 @@ fn region_se(se: &Image, r: Region) -> f64 {
         }
     }
     var.sqrt() / ((r.2 - r.0) * (r.3 - r.1)) as f64
-}
-
-/// Mean and standard error of the mean of `xs`.
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
 }
 
 /// A clamped, compensated VPL image converges to the unclamped path tracer.

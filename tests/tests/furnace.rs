@@ -170,10 +170,7 @@ fn progressive_mean(scene: &Scene, config: vpl_progressive::ProgressiveConfig, p
     let r = vpl_progressive::Progressive::new(scene, cam, config).unwrap();
     let means: Vec<f64> =
         (0..passes).map(|p| r.render_pass(p).0.iter().map(|v| v.element_sum() as f64 / 3.0).sum::<f64>() / 576.0).collect();
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
+    vpl_tests::mean_se(&means)
 }
 
 #[test]

@@ -50,13 +50,6 @@ fn totals(images: &[Image]) -> Vec<[f64; 3]> {
     images.iter().map(|im| im.mean()).collect()
 }
 
-fn mean_and_se_of(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / n;
-    let v = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
-    (m, (v / n).sqrt())
-}
-
 /// RR is unbiased, tested conditionally on its candidates. On `corner`
 /// (where it drops most of them), IR with fixed light paths and seed 1 gives
 /// the candidate set S (I = 1024); a fresh RR sampler knows no acceptance
@@ -91,7 +84,7 @@ fn rr_is_unbiased_given_its_candidates() {
     assert!(acceptance < 0.3, "RR should drop most candidates around the corner (mean acceptance {acceptance:.3})");
     let t = target.mean();
     for c in 0..3 {
-        let (m, se) = mean_and_se_of(&totals(&rr).iter().map(|x| x[c]).collect::<Vec<_>>());
+        let (m, se) = vpl_tests::mean_se(&totals(&rr).iter().map(|x| x[c]).collect::<Vec<_>>());
         let z = (m - t[c]) / se;
         eprintln!("channel {c}: RR {m:.5} ± {se:.5}, IR(S) {:.5}, z {z:.2}", t[c]);
         assert!(z.abs() < 4.0, "channel {c}: RR mean {m:.5} ± {se:.5} against IR(S) {:.5} (z {z:.2})", t[c]);
@@ -335,8 +328,8 @@ fn rr_thinning_of_an_overflow_is_unbiased() {
         .collect();
     let (tr, ti) = (totals(&rr), totals(&ir));
     for c in 0..3 {
-        let (mr, sr) = mean_and_se_of(&tr.iter().map(|t| t[c]).collect::<Vec<_>>());
-        let (mi, si) = mean_and_se_of(&ti.iter().map(|t| t[c]).collect::<Vec<_>>());
+        let (mr, sr) = vpl_tests::mean_se(&tr.iter().map(|t| t[c]).collect::<Vec<_>>());
+        let (mi, si) = vpl_tests::mean_se(&ti.iter().map(|t| t[c]).collect::<Vec<_>>());
         let z = (mr - mi) / (sr * sr + si * si).sqrt();
         eprintln!("channel {c}: RR thinned {mr:.5} ± {sr:.5}, IR {mi:.5} ± {si:.5}, z {z:.2}");
         assert!(z.abs() < 4.0, "channel {c}: RR thinned {mr:.5} ± {sr:.5} against IR {mi:.5} ± {si:.5} (z {z:.2})");

@@ -79,14 +79,16 @@ pub enum ClampArg {
 }
 
 impl ClampArg {
-    /// The clamp for a budget of `vpls` VPLs in `scene` seen by `camera`.
+    /// The clamp for a budget of `vpls` VPLs in `scene` seen by `camera`
+    /// (the renderer's rules, [`vpl_render::Clamp::resolve`]).
     pub fn resolve(self, vpls: usize, scene: &vpl_core::Scene, camera: &vpl_core::Camera) -> Option<vpl_core::GeometryClamp> {
-        match self {
-            ClampArg::Off => None,
-            ClampArg::Auto => Some(vpl_core::GeometryClamp::for_view(vpls, scene, camera)),
-            ClampArg::Area => Some(vpl_core::GeometryClamp::for_scene_area(vpls, scene.surface_area())),
-            ClampArg::Value(v) => Some(vpl_core::GeometryClamp::new(v)),
-        }
+        let rule = match self {
+            ClampArg::Off => vpl_render::Clamp::Off,
+            ClampArg::Auto => vpl_render::Clamp::Auto,
+            ClampArg::Area => vpl_render::Clamp::SceneArea,
+            ClampArg::Value(v) => vpl_render::Clamp::Value(vpl_core::GeometryClamp::new(v)),
+        };
+        rule.resolve(vpls, scene, camera)
     }
 }
 

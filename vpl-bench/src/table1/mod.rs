@@ -16,7 +16,7 @@ pub mod report;
 pub mod rows;
 pub mod stats;
 
-use crate::metrics::{TemporalError, temporal_error, tone_mapped_luminance, tone_mapped_stderr};
+use crate::metrics::{TemporalError, tone_mapped_luminance, tone_mapped_stderr};
 use crate::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
 use crate::sequence::run_sequence;
 use rows::Row;
@@ -701,7 +701,6 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             let mut lum = Vec::new();
             let mut err = Vec::new();
             let mut moved = Vec::new();
-            let mut e_per_seed = Vec::new();
             for seed in 0..spec.seeds {
                 let path = dir.join(spec.unit_file(Unit::Method { row: ri, method: mi, seed }));
                 let u: MethodUnit = read_json(&path)?;
@@ -711,7 +710,6 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
                 }
                 let l: Vec<Vec<f64>> =
                     u.tracked.iter().map(|fr| fr.iter().map(|c| tone_mapped_luminance(Vec3::from(*c))).collect()).collect();
-                e_per_seed.push(temporal_error(&l, &truth)?.e);
                 err.push(l.iter().zip(&truth).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<f64>>()).collect::<Vec<_>>());
                 lum.push(l);
                 moved.extend(u.moved.iter().skip(1).map(|&m| m as f64));
@@ -719,6 +717,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             }
             let series = stats::SeriesSums::new(&err).ok_or_else(|| Table1Error::Invalid(format!("{}: {name} has no errors", run.id)))?;
             let point = series.point();
+            let e_per_seed = (0..series.seeds()).map(|k| series.seed(k).e).collect();
             let frames = truth.len();
             let seeds = spec.seeds as usize;
             let error = TemporalError {

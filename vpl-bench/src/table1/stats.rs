@@ -171,6 +171,16 @@ impl SeriesSums {
     pub fn point(&self) -> Measures {
         self.measures(&(0..self.seeds).collect::<Vec<_>>(), &(0..self.pixels).collect::<Vec<_>>())
     }
+
+    /// The measures of seed `s` alone, over every pixel.
+    pub fn seed(&self, s: usize) -> Measures {
+        self.measures(&[s], &(0..self.pixels).collect::<Vec<_>>())
+    }
+
+    /// Number of seeds.
+    pub fn seeds(&self) -> usize {
+        self.seeds
+    }
 }
 
 /// The seeds and pixels each replicate draws, shared by the methods of a
@@ -272,10 +282,16 @@ mod tests {
     fn measures_match_the_definitions() {
         // Two seeds, two frames, one pixel.
         let err = vec![vec![vec![0.1], vec![-0.1]], vec![vec![0.3], vec![0.3]]];
-        let m = SeriesSums::new(&err).unwrap().point();
+        let sums = SeriesSums::new(&err).unwrap();
+        let m = sums.point();
         assert!((m.e - 0.2).abs() < 1e-12 && (m.bias - 0.15).abs() < 1e-12);
         // |ΔE|: 0.2 on seed 0, 0 on seed 1.
         assert!((m.e_prime - 0.1).abs() < 1e-12, "{m:?}");
+        // One seed alone is the paper's measure of that run (`temporal_error`).
+        let truth = vec![vec![0.0]; 2];
+        let t = crate::metrics::temporal_error(&err[0], &truth).unwrap();
+        let s0 = sums.seed(0);
+        assert!((s0.e - t.e).abs() < 1e-12 && (s0.e_prime - t.e_prime).abs() < 1e-12 && (s0.bias - t.bias).abs() < 1e-12);
         assert!(SeriesSums::new(&[vec![vec![0.1], vec![0.1, 0.2]]]).is_none());
         assert!(SeriesSums::new(&[]).is_none());
     }

@@ -42,6 +42,7 @@ pub mod gpu_bench;
 pub mod pipeline;
 pub mod plot;
 pub mod progressive;
+pub mod rays;
 pub mod stages;
 pub mod table1;
 pub mod table2;

@@ -304,6 +304,8 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
         (vec!["progressive-figures", "--only", "9", "--out", &out_s], "no figure 9"),
         (vec!["progressive-figures", "--fig8-scenes", "nowhere", "--out", &out_s], "nowhere"),
         (vec!["progressive-figures", "--seconds", "0", "--out", &out_s], "--seconds must be positive"),
+        (vec!["bench-rays", "--copies", "0"], "--copies and --size must be at least 1"),
+        (vec!["bench-rays", "--scene", "nowhere.toml"], "nowhere.toml"),
     ] {
         let o = vpl().args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
@@ -313,6 +315,22 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
         assert!(!out.exists(), "{args:?}: wrote {}", out.display());
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `vpl bench-rays` prints one row per scene and one for the copies of the
+/// last, with a positive rate in every column.
+#[test]
+fn bench_rays_prints_a_row_per_scene_and_copies() {
+    let o = vpl().args(["bench-rays", "--scene", "cornell,office", "--copies", "3", "--size", "16x16", "--seconds", "0"]).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| scene") && !l.starts_with("| ---")).collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    assert!(rows[0].starts_with("| cornell | 36 |") && rows[2].starts_with("| office ×3 |"), "{text}");
+    for r in rows {
+        let rates: Vec<f64> = r.split('|').map(str::trim).filter(|c| !c.is_empty()).skip(5).map(|c| c.parse().unwrap()).collect();
+        assert!(rates.len() == 3 && rates.iter().all(|&v| v > 0.0), "{r}");
+    }
 }
 
 /// `--backend gpu` where no adapter of the allowed backends exists (Metal

@@ -86,6 +86,27 @@ impl Bvh {
         Bvh { cwbvh, tris, order }
     }
 
+    /// Triangle references in the leaves (a triangle split by the builder's
+    /// spatial splits is referenced more than once).
+    pub fn primitive_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Nodes of the tree.
+    pub fn node_count(&self) -> usize {
+        self.cwbvh.nodes.len()
+    }
+
+    /// Bytes the BVH holds: its nodes, the prepared triangles and the two
+    /// index tables (capacity not counted).
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.cwbvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.cwbvh.primitive_indices.len() * size_of::<u32>()
+            + self.tris.len() * size_of::<PreparedTriangle>()
+            + self.order.len() * size_of::<u32>()
+    }
+
     /// Origin, direction and the obvhs ray of `ray`.
     ///
     /// - A component of −0.0 becomes +0.0: obvhs takes the traversal octant

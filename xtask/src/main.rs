@@ -12,6 +12,8 @@
 //! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
 //! - `cargo xtask test`: the whole test suite, as CI runs it.
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
+//! - `cargo xtask bench-rays`: BVH build time and memory, and rays per second (primary and diffuse
+//!   closest hits, shadow occlusion) on `cornell`, Dabrovic's Sponza and five Sponzas side by side.
 //! - `cargo xtask bench-vpl`: milliseconds per VPL stage at 640×360, 2048 VPLs, `cornell` and
 //!   `office`, and the SMC sampler's steps (the SMC paper's Table 2) on `office` and `maze`.
 //! - `cargo xtask bench-gpu`: milliseconds per GPU kernel and per indirect frame at 1920×1080,
@@ -45,7 +47,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
-     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-vpl [--repeat N] \
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
 
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         Some("test") => test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
+        Some("bench-rays") => bench_rays(&args[1..]),
         Some("bench-gpu") => bench_gpu(&args[1..]),
         Some("fuzz") => fuzz(&args[1..]),
         _ => Err(usage().to_string()),
@@ -117,6 +120,13 @@ fn bench_gpu(args: &[String]) -> Result<(), String> {
     let mut c = Command::new(vpl);
     c.arg("bench-gpu").args(args);
     run(c, "vpl bench-gpu")
+}
+
+fn bench_rays(args: &[String]) -> Result<(), String> {
+    let vpl = build_vpl()?;
+    let mut c = Command::new(vpl);
+    c.arg("bench-rays").args(args);
+    run(c, "vpl bench-rays")
 }
 
 fn bench_vpl(args: &[String]) -> Result<(), String> {

@@ -17,6 +17,7 @@
 mod args;
 mod bench_gpu;
 mod bench_pt;
+mod bench_rays;
 mod bench_vpl;
 mod export_scene;
 mod figures;
@@ -326,6 +327,9 @@ enum Command {
     ExportScene(export_scene::Args),
     /// Path-tracing throughput on `cornell` 256×256, max-depth 5, all cores.
     BenchPt(bench_pt::Args),
+    /// BVH build time and memory, and M rays/s for primary and diffuse closest hits and shadow
+    /// occlusion, on cornell, Dabrovic's Sponza and five Sponzas side by side.
+    BenchRays(bench_rays::Args),
     /// Milliseconds per VPL stage at 640×360 with 2048 IR VPLs on `cornell` and `office`, and the
     /// SMC sampler's steps (Table 2 of Hedman et al.) on `office` (I VPLs) and `maze` (I/4).
     BenchVpl(bench_vpl::Args),
@@ -544,6 +548,7 @@ fn dispatch(cli: Cli, registry: &Registry) -> Res<()> {
         Command::Track(a) => track::run(a, registry),
         Command::ExportScene(a) => export_scene::run(a, registry),
         Command::BenchPt(a) => bench_pt::run(a, registry),
+        Command::BenchRays(a) => bench_rays::run(a, registry),
         Command::BenchVpl(a) => bench_vpl::run(a, registry),
         Command::BenchGpu(a) => bench_gpu::run(a, registry),
         Command::Table1(a) => table1::run(a, registry),

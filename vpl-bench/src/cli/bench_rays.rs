@@ -1,0 +1,91 @@
+//! `vpl bench-rays`: BVH build time and memory, and rays per second for
+//! closest hits and occlusion, on scenes of growing size.
+
+use super::*;
+use crate::rays::{RaySets, closest_rate, occluded_rate, side_by_side, timed_build};
+use crate::table1::rows::scenes_dir;
+
+/// BVH build time and memory, and M rays/s for primary and diffuse closest hits and shadow
+/// occlusion, on `cornell` (36 triangles), Dabrovic's Sponza (66K) and five Sponzas side by
+/// side (330K), or the scenes given.
+#[derive(clap::Args)]
+pub(super) struct Args {
+    /// Scenes (built-in names, .toml or .obj files); default: cornell, Sponza and its copies.
+    #[arg(long, value_delimiter = ',')]
+    scene: Vec<String>,
+    /// Copies side by side of the last scene given (or of Sponza), as one more row (1: none).
+    #[arg(long, default_value_t = 5)]
+    copies: usize,
+    /// Primary rays: one per pixel of an image of this size (diffuse and shadow rays from their hits).
+    #[arg(long, default_value = "512x512")]
+    size: Size,
+    /// Least seconds each figure is measured over (the fastest pass is reported).
+    #[arg(long, default_value_t = 1.0)]
+    seconds: f64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// The default scenes: `cornell` and, where its model is present, Sponza.
+fn default_scenes() -> Vec<String> {
+    let mut s = vec!["cornell".to_string()];
+    let sponza = scenes_dir().join("sponza-dabrovic.toml");
+    let model = scenes_dir().join("../../shared/scenes/sponza-dabrovic");
+    if sponza.is_file() && model.is_dir() {
+        s.push(sponza.display().to_string());
+    } else {
+        eprintln!("bench-rays: Dabrovic's Sponza is not on this machine (../shared/scenes): cornell only");
+    }
+    s
+}
+
+/// Runs `vpl bench-rays`.
+pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
+    let Args { scene, copies, size, seconds, threads } = args;
+    if copies == 0 || size.0 == 0 || size.1 == 0 || !(0.0..=600.0).contains(&seconds) {
+        return Err("--copies and --size must be at least 1, --seconds within 0..600".into());
+    }
+    let pool = pool(threads)?;
+    let scenes = if scene.is_empty() { default_scenes() } else { scene };
+    println!(
+        "bench-rays: {}x{} primary rays (one diffuse and one shadow ray from each hit), {} threads, fastest pass of at least {seconds} s",
+        size.0,
+        size.1,
+        pool.current_num_threads()
+    );
+    println!("| scene | triangles | build (ms) | BVH (MiB) | nodes | primary (M rays/s) | diffuse (M rays/s) | shadow (M rays/s) |");
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let last = scenes.len() - 1;
+    for (i, spec) in scenes.iter().enumerate() {
+        let setup = SceneSetup::load(spec).map_err(|e| e.to_string())?;
+        let name = setup.scene.name.clone();
+        let tris = &setup.scene.geometry.triangles;
+        let sets = pool.install(|| RaySets::new(&setup.scene, &setup.camera, (size.0, size.1), 1));
+        let mut rows = vec![(name.clone(), tris.clone())];
+        if i == last && copies > 1 {
+            rows.push((format!("{name} ×{copies}"), side_by_side(tris, copies)));
+        }
+        for (label, tris) in rows {
+            let (bvh, build) = pool.install(|| timed_build(&tris, seconds.min(2.0)));
+            let (p, d, s) = pool.install(|| {
+                (
+                    closest_rate(&bvh, &sets.primary, seconds),
+                    closest_rate(&bvh, &sets.diffuse, seconds),
+                    occluded_rate(&bvh, &sets.shadow, seconds),
+                )
+            });
+            println!(
+                "| {label} | {} | {:.2} | {:.2} | {} | {:.2} | {:.2} | {:.2} |",
+                tris.len(),
+                build * 1e3,
+                bvh.memory_bytes() as f64 / (1 << 20) as f64,
+                bvh.node_count(),
+                p.rays_per_second() / 1e6,
+                d.rays_per_second() / 1e6,
+                s.rays_per_second() / 1e6
+            );
+        }
+    }
+    Ok(())
+}

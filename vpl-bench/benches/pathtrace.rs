@@ -2,6 +2,7 @@
 //! `cargo xtask bench-pt` gives the headline 256×256 figure; this tracks regressions.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use vpl_bench::rays::RaySets;
 use vpl_core::{Ray, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 
@@ -22,6 +23,24 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(rays.len() as u64));
     g.bench_function("cornell_primary_closest", |b| b.iter(|| rays.iter().filter(|r| setup.scene.intersect(r).is_some()).count()));
     g.bench_function("cornell_primary_occluded", |b| b.iter(|| rays.iter().filter(|r| setup.scene.occluded(r)).count()));
+    // The traversal kernels alone, one thread, on the three kinds of rays of `vpl bench-rays`.
+    for name in ["cornell", "office"] {
+        let s = SceneSetup::load(name).unwrap();
+        let sets = RaySets::new(&s.scene, &s.camera, (64, 64), 1);
+        let bvh = &s.scene.geometry.bvh;
+        for (kind, rays, closest) in [("primary", &sets.primary, true), ("diffuse", &sets.diffuse, true), ("shadow", &sets.shadow, false)] {
+            g.throughput(Throughput::Elements(rays.len() as u64));
+            g.bench_function(format!("{name}_{kind}_traversal"), |b| {
+                b.iter(|| {
+                    if closest {
+                        rays.iter().filter(|r| bvh.closest(r).is_some()).count()
+                    } else {
+                        rays.iter().filter(|r| bvh.occluded(r)).count()
+                    }
+                })
+            });
+        }
+    }
     g.finish();
 }
 

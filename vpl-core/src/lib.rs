@@ -2,7 +2,7 @@
 //!
 //! The ground every crate of the VPL toolkit stands on: rays and frames,
 //! seeded random streams, the scene (one triangle mesh, materials, lights,
-//! a CWBVH from `obvhs`), cameras, images with EXR and PNG I/O, the OBJ and
+//! an 8-wide BVH built by `obvhs` with a watertight triangle test), cameras, images with EXR and PNG I/O, the OBJ and
 //! TOML loaders, the built-in scenes and their animations, and what the VPL
 //! stages share: [`Vpl`] and [`VplSet`], the [`GBuffer`], the per-frame
 //! [`Frame`], light emission sampling, and the traits [`VplSampler`],

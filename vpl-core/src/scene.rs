@@ -106,6 +106,8 @@ impl Scene {
         let mut triangles = Vec::with_capacity(mesh.triangles.len());
         let mut shading_normals = Vec::new();
         let mut degenerate = 0usize;
+        // The mesh's own vertex coordinates, for a watertight BVH.
+        let mut vertices = Vec::with_capacity(mesh.triangles.len());
         for (ti, t) in mesh.triangles.iter().enumerate() {
             let get = |i: u32| -> Result<Vec3> {
                 mesh.positions
@@ -135,6 +137,7 @@ impl Scene {
                 }
             }
             triangles.push(TriangleData { p0, e1, e2, ng, area, material: t.material, normals });
+            vertices.push([p0, p1, p2]);
         }
         if degenerate > 0 {
             warnings.push(format!("{name}: skipped {degenerate} zero-area triangle(s)"));
@@ -152,7 +155,7 @@ impl Scene {
         }
         let extent = lo.abs().max(hi.abs()).max_element().max(1.0);
         let epsilon = 1e-4 * extent;
-        let bvh = Bvh::build(&triangles);
+        let bvh = Bvh::build(&vertices)?;
         let geometry = Arc::new(Geometry { triangles, shading_normals, bvh, bounds: (lo, hi), epsilon, degenerate });
         let mut scene = Scene {
             name,
@@ -279,7 +282,7 @@ impl Scene {
     /// same triangle; `t` stays where that test misses (an edge, by rounding).
     #[inline]
     pub fn hit_near(&self, ray: &Ray, tri: u32, t: f32) -> Hit {
-        let t = self.geometry.bvh.triangle_t(&self.geometry.triangles, ray, tri).unwrap_or(t);
+        let t = self.geometry.bvh.triangle_t(ray, tri).unwrap_or(t);
         self.hit_at(ray, tri, t)
     }
 

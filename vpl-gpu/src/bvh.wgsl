@@ -5,8 +5,8 @@
 //   [min.xyz, first_index], [max.xyz, prim_count]; an inner node has
 //   prim_count 0 and children first_index, first_index + 1; a leaf holds
 //   BVH primitives first_index .. first_index + prim_count.
-// bvh_tris: three vec4 per BVH primitive, the rows of the affine map of
-//   vpl_core::bvh::prepared_rows (Baldwin & Weber 2016).
+// bvh_tris: three vec4 per BVH primitive, its vertices (xyz; w unused), the
+//   same coordinates the CPU's BVH tests (vpl_core::bvh::Bvh::vertices).
 // bvh_order: scene triangle of each BVH primitive.
 // tri_info: four vec4 per scene triangle: [p0, material], [e1, normals],
 //   [e2, area], [ng, -] (integers bit-cast; normals = 0xffffffff when flat).
@@ -30,20 +30,55 @@ struct Hit {
     prim: u32,
 }
 
-// The ray parameter of the hit with BVH primitive k in [0, t_max], or NO_HIT.
+// The ray parameter of the hit with BVH primitive k in [0, t_max], or NO_HIT:
+// the watertight test of Woop, Benthin & Wald (2013), as vpl_core::bvh's
+// (the ray sheared so that its direction is +z, the edge functions U, V, W
+// of the sheared vertices, t = T / det). WGSL has no portable f64, so the
+// CPU's double-precision recomputation of edge functions that round to
+// exactly zero is left out: the two may decide differently for a ray that
+// passes exactly through an edge.
 fn tri_test(k: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> f32 {
-    let r0 = bvh_tris[3u * k];
-    let r1 = bvh_tris[3u * k + 1u];
-    let r2 = bvh_tris[3u * k + 2u];
-    let oz = dot(r2.xyz, o) + r2.w;
-    let dz = dot(r2.xyz, d);
-    let t = -oz / dz;
-    if (!(t >= 0.0 && t <= t_max)) { return NO_HIT; }
-    let p = o + d * t;
-    let u = dot(r0.xyz, p) + r0.w;
-    let v = dot(r1.xyz, p) + r1.w;
-    if (u >= 0.0 && v >= 0.0 && u + v <= 1.0) { return t; }
-    return NO_HIT;
+    let a = bvh_tris[3u * k].xyz - o;
+    let b = bvh_tris[3u * k + 1u].xyz - o;
+    let c = bvh_tris[3u * k + 2u].xyz - o;
+    let ad = abs(d);
+    var kz = 2u;
+    if (ad.x > ad.y) {
+        if (ad.x > ad.z) { kz = 0u; }
+    } else if (ad.y > ad.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kz + 2u) % 3u;
+    if (d[kz] < 0.0) {
+        let swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    let sx = d[kx] / d[kz];
+    let sy = d[ky] / d[kz];
+    let sz = 1.0 / d[kz];
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) { return NO_HIT; }
+    let det = u + v + w;
+    if (det == 0.0) { return NO_HIT; }
+    let t = u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz]);
+    if (det > 0.0) {
+        if (t < 0.0 || t > t_max * det) { return NO_HIT; }
+    } else {
+        if (t > 0.0 || t < t_max * det) { return NO_HIT; }
+    }
+    let r = t / det;
+    if (!(r >= 0.0)) { return NO_HIT; }
+    return r;
 }
 
 // Entry distance of the ray into node i's box within [0, t_max], or NO_HIT.

@@ -8,8 +8,7 @@ use obvhs::bvh2::builder::build_bvh2_from_tris;
 use obvhs::triangle::Triangle;
 use std::sync::Arc;
 use std::time::Duration;
-use vpl_core::bvh::prepared_rows;
-use vpl_core::glam::Vec4;
+use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{Geometry, Scene};
 
 /// WGSL of the scene bindings and the traversal (`closest_hit`, `occluded`),
@@ -22,9 +21,11 @@ const MAX_DEPTH: usize = 64;
 /// A scene on the device (group 0 of every kernel that traces rays).
 ///
 /// The GPU traverses a binary BVH (obvhs's PLOC builder with reinsertion,
-/// up to 4 triangles a leaf) rather than the CPU's compressed 8-wide one:
-/// a stack walk of a binary tree is short, portable WGSL. Both test the same
-/// prepared triangles ([`prepared_rows`]), so hits agree up to rounding.
+/// up to 4 triangles a leaf) rather than the CPU's 8-wide one: a stack walk
+/// of a binary tree is short, portable WGSL. Both test triangles with the
+/// same watertight test on the same vertex coordinates
+/// ([`Bvh::vertices`](vpl_core::bvh::Bvh::vertices)), so hits agree up to
+/// rounding.
 pub struct GpuScene {
     /// The geometry uploaded (compared by identity to reuse the upload).
     geometry: Arc<Geometry>,
@@ -36,6 +37,11 @@ pub struct GpuScene {
     pub depth: usize,
     buffers: Vec<wgpu::Buffer>,
     pub(crate) group: wgpu::BindGroup,
+}
+
+/// A triangle's corners from its first vertex and edges.
+fn corners(t: &vpl_core::triangle::TriangleData) -> [Vec3; 3] {
+    [t.p0, t.p0 + t.e1, t.p0 + t.e2]
 }
 
 fn material_rows(scene: &Scene) -> Vec<[Vec4; 2]> {
@@ -54,8 +60,10 @@ impl GpuScene {
         if g.triangles.is_empty() {
             return Err(GpuError::Invalid(format!("scene `{}` has no triangles", scene.name)));
         }
-        let tris: Vec<Triangle> =
-            g.triangles.iter().map(|t| Triangle { v0: t.p0.into(), v1: (t.p0 + t.e1).into(), v2: (t.p0 + t.e2).into() }).collect();
+        // The vertices the CPU's BVH tests (the mesh's own coordinates).
+        let vertices: Vec<[Vec3; 3]> =
+            (0..g.triangles.len() as u32).map(|i| g.bvh.vertices(i).unwrap_or_else(|| corners(&g.triangles[i as usize]))).collect();
+        let tris: Vec<Triangle> = vertices.iter().map(|v| Triangle { v0: v[0].into(), v1: v[1].into(), v2: v[2].into() }).collect();
         let mut params = BvhBuildParams::medium_build();
         params.max_prims_per_leaf = 4;
         let bvh = build_bvh2_from_tris(&tris, params, &mut Duration::default());
@@ -81,7 +89,7 @@ impl GpuScene {
                 [Vec4::new(a.x, a.y, a.z, f32::from_bits(n.first_index)), Vec4::new(b.x, b.y, b.z, f32::from_bits(n.prim_count))]
             })
             .collect();
-        let prepared: Vec<Vec4> = bvh.primitive_indices.iter().flat_map(|&i| prepared_rows(&g.triangles[i as usize])).collect();
+        let prepared: Vec<Vec4> = bvh.primitive_indices.iter().flat_map(|&i| vertices[i as usize].map(|v| v.extend(0.0))).collect();
         let info: Vec<Vec4> = g
             .triangles
             .iter()

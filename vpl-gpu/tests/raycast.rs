@@ -1,8 +1,9 @@
 //! GPU ray casting against the CPU BVH (`Scene::intersect`, `Scene::occluded`).
 //!
 //! The two traverse different trees (binary on the GPU, 8-wide on the CPU)
-//! over the same prepared triangles, so a ray finds the same triangle at the
-//! same t up to rounding (the GPU may fuse multiply-adds). Rays through a
+//! and test triangles with the same watertight test on the same vertices, so
+//! a ray finds the same triangle at the same t up to rounding (the GPU may
+//! fuse multiply-adds). Rays through a
 //! shared edge or onto coplanar faces (cornell's camera rays meet the box
 //! corners exactly; the tall box stands on the floor's plane) tie, and the
 //! two may pick different triangles at the same t. Tolerances: hit or miss

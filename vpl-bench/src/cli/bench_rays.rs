@@ -49,10 +49,11 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     let pool = pool(threads)?;
     let scenes = if scene.is_empty() { default_scenes() } else { scene };
     println!(
-        "bench-rays: {}x{} primary rays (one diffuse and one shadow ray from each hit), {} threads, fastest pass of at least {seconds} s",
+        "bench-rays: {}x{} primary rays (one diffuse and one shadow ray from each hit), {} threads, fastest pass of at least {seconds} s, traversal for {}",
         size.0,
         size.1,
-        pool.current_num_threads()
+        pool.current_num_threads(),
+        if vpl_core::bvh::Bvh::build(&[]).is_ok_and(|b| b.uses_avx2()) { "AVX2 and FMA" } else { "SSE2" }
     );
     println!("| scene | triangles | build (ms) | BVH (MiB) | nodes | primary (M rays/s) | diffuse (M rays/s) | shadow (M rays/s) |");
     println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
@@ -67,7 +68,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
             rows.push((format!("{name} ×{copies}"), side_by_side(tris, copies)));
         }
         for (label, tris) in rows {
-            let (bvh, build) = pool.install(|| timed_build(&tris, seconds.min(2.0)));
+            let (bvh, build) = pool.install(|| timed_build(&tris, seconds.min(2.0))).map_err(|e| e.to_string())?;
             let (p, d, s) = pool.install(|| {
                 (
                     closest_rate(&bvh, &sets.primary, seconds),

@@ -10,12 +10,13 @@
 //! ray enters nearest first and skips those beyond the best hit so far
 //! (closest hit), or stops at the first hit (occlusion).
 //!
-//! The slab test is written over fixed arrays of eight lanes; the whole
-//! traversal is compiled twice, for the x86-64 baseline (SSE2: two 4-wide
-//! halves) and for AVX2 with FMA (one 8-wide step), and the build picks the
-//! second where the CPU has it (`is_x86_feature_detected!`). Both give the
-//! same hits bit for bit: the lanes are independent and the arithmetic is
-//! the same (no fused multiply-add is written; the compiler may not fuse).
+//! The slab test is written over fixed arrays of eight lanes, and once more
+//! with AVX intrinsics (one 8-wide step and one mask move); the whole
+//! traversal is compiled twice, for the x86-64 baseline (SSE2: the lanes in
+//! two 4-wide halves) and for AVX2 with FMA, and the build picks the second
+//! where the CPU has it (`is_x86_feature_detected!`). Both give the same
+//! hits bit for bit: the lanes are independent and the arithmetic is the
+//! same (no fused multiply-add is written; the compiler may not fuse).
 
 mod node;
 mod watertight;
@@ -232,7 +233,7 @@ impl Bvh {
         let mut t_near = [0f32; WIDTH];
         loop {
             let n = &self.nodes[node];
-            let mut mask = boxes.children(n, -BACKSTEP, best_t, &mut t_near);
+            let mut mask = boxes.children_on(self.avx2, n, -BACKSTEP, best_t, &mut t_near);
             // The entered children, nearest last so that it is popped first.
             let mut entered = [(0u32, 0f32); WIDTH];
             let mut k = 0;
@@ -290,7 +291,7 @@ impl Bvh {
         let mut t_near = [0f32; WIDTH];
         loop {
             let n = &self.nodes[node];
-            let mut mask = boxes.children(n, -BACKSTEP, t_max, &mut t_near);
+            let mut mask = boxes.children_on(self.avx2, n, -BACKSTEP, t_max, &mut t_near);
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;

@@ -137,7 +137,7 @@ pub fn occluded_rate(bvh: &Bvh, rays: &[Ray], min_seconds: f64) -> Rate {
 pub fn side_by_side(triangles: &[TriangleData], copies: usize) -> Vec<TriangleData> {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for t in triangles {
-        for p in [t.p0, t.p0 + t.e1, t.p0 + t.e2] {
+        for p in t.corners() {
             lo = lo.min(p);
             hi = hi.max(p);
         }

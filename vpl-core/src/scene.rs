@@ -148,7 +148,7 @@ impl Scene {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for t in &triangles {
-            for p in [t.p0, t.p0 + t.e1, t.p0 + t.e2] {
+            for p in t.corners() {
                 lo = lo.min(p);
                 hi = hi.max(p);
             }

@@ -23,6 +23,13 @@ pub struct TriangleData {
 }
 
 impl TriangleData {
+    /// The three corners p0, p0 + e1, p0 + e2 (the mesh's own p1 and p2 up
+    /// to the rounding of the edges).
+    #[inline]
+    pub fn corners(&self) -> [Vec3; 3] {
+        [self.p0, self.p0 + self.e1, self.p0 + self.e2]
+    }
+
     /// The point a uniform sample `u` ∈ [0, 1)² maps to ([`uniform_triangle`]):
     /// how light sampling, light emission and the progressive renderer's
     /// primary VPLs place a point on an emitting triangle.

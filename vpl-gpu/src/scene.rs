@@ -39,11 +39,6 @@ pub struct GpuScene {
     pub(crate) group: wgpu::BindGroup,
 }
 
-/// A triangle's corners from its first vertex and edges.
-fn corners(t: &vpl_core::triangle::TriangleData) -> [Vec3; 3] {
-    [t.p0, t.p0 + t.e1, t.p0 + t.e2]
-}
-
 fn material_rows(scene: &Scene) -> Vec<[Vec4; 2]> {
     scene.materials.iter().map(|m| [m.albedo.extend(0.0), m.emission.extend(0.0)]).collect()
 }
@@ -62,7 +57,7 @@ impl GpuScene {
         }
         // The vertices the CPU's BVH tests (the mesh's own coordinates).
         let vertices: Vec<[Vec3; 3]> =
-            (0..g.triangles.len() as u32).map(|i| g.bvh.vertices(i).unwrap_or_else(|| corners(&g.triangles[i as usize]))).collect();
+            (0..g.triangles.len() as u32).map(|i| g.bvh.vertices(i).unwrap_or_else(|| g.triangles[i as usize].corners())).collect();
         let tris: Vec<Triangle> = vertices.iter().map(|v| Triangle { v0: v[0].into(), v1: v[1].into(), v2: v[2].into() }).collect();
         let mut params = BvhBuildParams::medium_build();
         params.max_prims_per_leaf = 4;

@@ -90,7 +90,7 @@ pub fn curvature(scene: &Scene, tri: u32) -> f32 {
         return 0.0;
     }
     let n = &scene.geometry.shading_normals[t.normals as usize];
-    let p = [t.p0, t.p0 + t.e1, t.p0 + t.e2];
+    let p = t.corners();
     let (mut num, mut den) = (0.0f32, 0.0f32);
     for (i, j) in [(0, 1), (1, 2), (2, 0)] {
         let dp = p[i] - p[j];

@@ -133,7 +133,7 @@ impl Bvh {
     /// reproduce shared vertices exactly; scenes build from their meshes'
     /// vertices instead).
     pub fn from_triangles(triangles: &[TriangleData]) -> Result<Bvh> {
-        let vertices: Vec<[Vec3; 3]> = triangles.iter().map(|t| [t.p0, t.p0 + t.e1, t.p0 + t.e2]).collect();
+        let vertices: Vec<[Vec3; 3]> = triangles.iter().map(TriangleData::corners).collect();
         Bvh::build(&vertices)
     }
 
@@ -322,9 +322,7 @@ impl Bvh {
     /// `[0, t_max]`, by the same test as [`Bvh::closest`], so a hit found
     /// elsewhere (a GPU) gets the t this BVH would report.
     pub fn triangle_t(&self, ray: &Ray, tri: u32) -> Option<f32> {
-        let slot = *self.slot_of.get(tri as usize)?;
-        let v = self.tris.get(slot as usize)?;
-        ShearedRay::new(ray.o, ray.d).hit(v, ray.t_max)
+        ShearedRay::new(ray.o, ray.d).hit(&self.vertices(tri)?, ray.t_max)
     }
 }
 
@@ -437,7 +435,7 @@ mod tests {
         let scene = &setup.scene;
         let bvh = &scene.geometry.bvh;
         assert!(bvh.node_count() > 8, "{}", bvh.node_count());
-        let tris: Vec<[Vec3; 3]> = scene.geometry.triangles.iter().map(|t| [t.p0, t.p0 + t.e1, t.p0 + t.e2]).collect();
+        let tris: Vec<[Vec3; 3]> = scene.geometry.triangles.iter().map(TriangleData::corners).collect();
         let exact = Bvh::build(&tris).unwrap();
         let baseline = Bvh { avx2: false, ..Bvh::build(&tris).unwrap() };
         let (lo, hi) = scene.geometry.bounds;

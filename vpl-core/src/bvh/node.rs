@@ -1,9 +1,10 @@
 //! An 8-wide BVH node with its children's boxes in structure-of-arrays
 //! order, and the slab test of a ray against all eight at once.
 //!
-//! The test is written lane by lane over fixed arrays of eight, which the
-//! compiler turns into two 4-wide SSE operations per step, or one 8-wide
-//! AVX2 operation in the traversal compiled for AVX2 (see `super`).
+//! The test is written twice: with AVX intrinsics (one 8-wide step and one
+//! mask move) for CPUs with AVX2 and FMA, and lane by lane over fixed
+//! arrays of eight, which the compiler turns into two 4-wide SSE operations
+//! per step, for the others; [`BoxRay::children_on`] picks one.
 
 use glam::Vec3;
 
@@ -77,6 +78,13 @@ impl BoxRay {
         BoxRay { inv, o_inv: [o.x * inv[0], o.y * inv[1], o.z * inv[2]], negative: [inv[0] < 0.0, inv[1] < 0.0, inv[2] < 0.0] }
     }
 
+    /// The near and far faces of `n`'s boxes on each axis, as the ray meets them.
+    #[inline(always)]
+    fn faces<'n>(&self, n: &'n Node8) -> [(&'n [f32; WIDTH], &'n [f32; WIDTH]); 3] {
+        let face = |a: usize| if self.negative[a] { (&n.hi[a], &n.lo[a]) } else { (&n.lo[a], &n.hi[a]) };
+        [face(0), face(1), face(2)]
+    }
+
     /// [`BoxRay::children`] with AVX: the same operations in the same order
     /// (multiply, subtract, max, min, an ordered ≤), so the same bits, with
     /// the hit mask taken by one `vmovmskps` (the lane loop's mask compiles
@@ -90,8 +98,7 @@ impl BoxRay {
     #[inline]
     pub(crate) unsafe fn children_avx2(&self, n: &Node8, t_min: f32, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
         use std::arch::x86_64::*;
-        let face = |a: usize| if self.negative[a] { (&n.hi[a], &n.lo[a]) } else { (&n.lo[a], &n.hi[a]) };
-        let ((nx, fx), (ny, fy), (nz, fz)) = (face(0), face(1), face(2));
+        let [(nx, fx), (ny, fy), (nz, fz)] = self.faces(n);
         // SAFETY: each load reads the 8 floats of a `[f32; 8]`.
         let load = |a: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(a.as_ptr()) };
         let axis = |a: usize| (_mm256_set1_ps(self.inv[a]), _mm256_set1_ps(self.o_inv[a]));
@@ -123,8 +130,7 @@ impl BoxRay {
     /// bit mask, and each child's entry distance in `t_near`.
     #[inline(always)]
     pub(crate) fn children(&self, n: &Node8, t_min: f32, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
-        let face = |a: usize| if self.negative[a] { (&n.hi[a], &n.lo[a]) } else { (&n.lo[a], &n.hi[a]) };
-        let ((nx, fx), (ny, fy), (nz, fz)) = (face(0), face(1), face(2));
+        let [(nx, fx), (ny, fy), (nz, fz)] = self.faces(n);
         let [ix, iy, iz] = self.inv;
         let [ox, oy, oz] = self.o_inv;
         let mut mask = 0u32;

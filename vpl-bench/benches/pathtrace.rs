@@ -1,5 +1,6 @@
 //! Criterion bench of the path tracer on `cornell` (max-depth 5): throughput in paths.
 //! `cargo xtask bench-pt` gives the headline 256×256 figure; this tracks regressions.
+//! Also the BVH's traversal kernels and one shadow map's rays.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use vpl_bench::rays::RaySets;
@@ -40,6 +41,36 @@ fn bench(c: &mut Criterion) {
                 })
             });
         }
+    }
+    g.finish();
+    // One 128² paraboloid shadow map (16,384 rays from one VPL, traced in bundles), one thread.
+    let mut g = c.benchmark_group("shadow_map");
+    for name in ["cornell", "office"] {
+        let s = SceneSetup::load(name).unwrap();
+        let set = vpl_sampling::InstantRadiosity::new(vpl_sampling::IrConfig { vpls: 64, ..Default::default() })
+            .unwrap()
+            .sample(&s.scene, 3)
+            .clone();
+        let one = |k: usize| {
+            let mut v = vpl_core::VplSet::new(1);
+            v.set(0, set.get(k).copied());
+            v
+        };
+        let sets: Vec<_> = (0..set.len()).filter(|&k| set.get(k).is_some()).take(8).map(one).collect();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        g.throughput(Throughput::Elements(128 * 128 * sets.len() as u64));
+        g.bench_function(format!("{name}_128x128_x{}", sets.len()), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    sets.iter()
+                        .map(|v| {
+                            let mut m = vpl_visibility::ShadowMaps::new(128).unwrap();
+                            vpl_core::VplVisibility::update(&mut m, &s.scene, v).rebuilt
+                        })
+                        .sum::<usize>()
+                })
+            })
+        });
     }
     g.finish();
 }

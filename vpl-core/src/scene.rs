@@ -276,6 +276,18 @@ impl Scene {
         Some(self.hit_at(ray, tri, t))
     }
 
+    /// The closest hit (triangle, t) of each ray from `o` along `dirs[i]`,
+    /// into `out[i]`: [`Bvh::closest_fan`](crate::bvh::Bvh::closest_fan),
+    /// which traces rays that share their origin in bundles (neighbouring
+    /// directions should be neighbours in `dirs`).
+    ///
+    /// # Panics
+    /// If `out` is shorter than `dirs`.
+    #[inline]
+    pub fn closest_fan(&self, o: Vec3, dirs: &[Vec3], out: &mut [Option<(u32, f32)>]) {
+        self.geometry.bvh.closest_fan(o, dirs, f32::INFINITY, out)
+    }
+
     /// The hit of `ray` with triangle `tri`, found elsewhere at about
     /// `t` (a GPU): t is recomputed by the CPU BVH's triangle test, so the
     /// hit is the one [`Scene::intersect`] reports whenever both found the

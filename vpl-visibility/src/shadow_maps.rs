@@ -3,10 +3,15 @@
 use crate::paraboloid::paraboloid_to_direction;
 use rayon::prelude::*;
 use vpl_core::glam::{Vec2, Vec3};
-use vpl_core::{LocalFrame, Ray, Receivers, Scene, VisibilityUpdate, Vpl, VplSet, VplVisibility};
+use vpl_core::{LocalFrame, Receivers, Scene, VisibilityUpdate, Vpl, VplSet, VplVisibility};
 
 /// The SMC paper's default map size (§4): 128×128 texels.
 pub const DEFAULT_RESOLUTION: u32 = 128;
+
+/// Side of the tiles of texels traced together: a tile's rays are one
+/// bundle of [`vpl_core::bvh::FAN`].
+const TILE: usize = 8;
+const _: () = assert!(TILE * TILE == vpl_core::bvh::FAN);
 
 /// Largest accepted map side.
 pub const MAX_RESOLUTION: u32 = 4096;
@@ -53,6 +58,9 @@ struct Map {
 #[derive(Clone, Debug)]
 pub struct ShadowMaps {
     res: u32,
+    /// The local direction of each texel's centre, row-major (the same
+    /// for every map).
+    texels: Vec<Vec3>,
     maps: Vec<Option<Map>>,
     eps: f32,
     /// Scale k of the slope-dependent depth bias (default 1).
@@ -65,7 +73,10 @@ impl ShadowMaps {
         if res == 0 || res > MAX_RESOLUTION {
             return Err(ShadowMapError::Resolution(res));
         }
-        Ok(ShadowMaps { res, maps: Vec::new(), eps: 0.0, bias_scale: 1.0 })
+        let scale = 2.0 / res as f32;
+        let centre = |k: u32| (k as f32 + 0.5) * scale - 1.0;
+        let texels = (0..res * res).map(|k| paraboloid_to_direction(Vec2::new(centre(k % res), centre(k / res)))).collect();
+        Ok(ShadowMaps { res, texels, maps: Vec::new(), eps: 0.0, bias_scale: 1.0 })
     }
 
     /// Texels per side.
@@ -78,19 +89,32 @@ impl ShadowMaps {
         self.maps.iter().filter(|m| m.is_some()).count()
     }
 
-    /// Renders the map of `vpl` by casting one ray per texel.
-    fn render(scene: &Scene, vpl: &Vpl, res: u32) -> Map {
+    /// Renders the map of `vpl` by casting one ray per texel, in tiles of
+    /// [`TILE`] × [`TILE`] texels traced together from the VPL
+    /// ([`Scene::closest_fan`]).
+    fn render(scene: &Scene, vpl: &Vpl, res: u32, texels: &[Vec3]) -> Map {
         let eps = scene.epsilon();
         let origin = vpl.y + vpl.n * eps;
         let frame = LocalFrame::from_normal(vpl.n);
-        let mut depth = vec![0.0f32; (res * res) as usize];
-        let scale = 2.0 / res as f32;
-        depth.par_chunks_mut(res as usize).enumerate().for_each(|(j, row)| {
-            let v = (j as f32 + 0.5) * scale - 1.0;
-            for (i, d) in row.iter_mut().enumerate() {
-                let u = (i as f32 + 0.5) * scale - 1.0;
-                let dir = frame.to_world(paraboloid_to_direction(Vec2::new(u, v)));
-                *d = scene.intersect(&Ray::new(origin, dir)).map_or(f32::INFINITY, |h| h.t);
+        let res = res as usize;
+        let mut depth = vec![0.0f32; res * res];
+        depth.par_chunks_mut(TILE * res).enumerate().for_each(|(band, rows)| {
+            let (j0, h) = (band * TILE, rows.len() / res);
+            let mut dirs = [Vec3::ZERO; TILE * TILE];
+            let mut hits = [None; TILE * TILE];
+            for i0 in (0..res).step_by(TILE) {
+                let w = TILE.min(res - i0);
+                for dj in 0..h {
+                    for di in 0..w {
+                        dirs[dj * w + di] = frame.to_world(texels[(j0 + dj) * res + i0 + di]);
+                    }
+                }
+                scene.closest_fan(origin, &dirs[..w * h], &mut hits);
+                for dj in 0..h {
+                    for di in 0..w {
+                        rows[dj * res + i0 + di] = hits[dj * w + di].map_or(f32::INFINITY, |(_, t)| t);
+                    }
+                }
             }
         });
         Map { key: (vpl.y, vpl.n), origin, frame, depth }
@@ -223,9 +247,9 @@ impl VplVisibility for ShadowMaps {
                 self.maps[s] = None;
             }
         }
-        let res = self.res;
+        let (res, texels) = (self.res, &self.texels);
         let fresh: Vec<(usize, Map)> =
-            stale.par_iter().map(|&s| (s, Self::render(scene, vpls.get(s).expect("stale slots hold a VPL"), res))).collect();
+            stale.par_iter().map(|&s| (s, Self::render(scene, vpls.get(s).expect("stale slots hold a VPL"), res, texels))).collect();
         for (s, m) in fresh {
             self.maps[s] = Some(m);
         }

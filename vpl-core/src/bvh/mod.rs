@@ -18,8 +18,11 @@
 //! hits bit for bit: the lanes are independent and the arithmetic is the
 //! same (no fused multiply-add is written; the compiler may not fuse).
 
+mod fan;
 mod node;
 mod watertight;
+
+pub use fan::FAN;
 
 use crate::error::{CoreError, Result};
 use crate::ray::Ray;
@@ -92,6 +95,8 @@ pub struct Bvh {
     slot_of: Vec<u32>,
     /// Whether the traversal compiled for AVX2 and FMA runs.
     avx2: bool,
+    /// The largest magnitude of any vertex coordinate.
+    extent: f32,
 }
 
 impl Bvh {
@@ -104,7 +109,8 @@ impl Bvh {
     /// about 268 million, splits included).
     pub fn build(vertices: &[[Vec3; 3]]) -> Result<Bvh> {
         let avx2 = detect_avx2();
-        let mut bvh = Bvh { nodes: Vec::new(), tris: Vec::new(), order: Vec::new(), slot_of: vec![u32::MAX; vertices.len()], avx2 };
+        let mut bvh =
+            Bvh { nodes: Vec::new(), tris: Vec::new(), order: Vec::new(), slot_of: vec![u32::MAX; vertices.len()], avx2, extent: 0.0 };
         if vertices.is_empty() {
             return Ok(bvh);
         }
@@ -125,6 +131,7 @@ impl Bvh {
             bvh.slot_of[i as usize] = k as u32;
         }
         bvh.nodes = fold(&b2);
+        bvh.extent = vertices.iter().flatten().fold(0f32, |m, v| m.max(v.abs().max_element()));
         Ok(bvh)
     }
 

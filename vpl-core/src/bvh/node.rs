@@ -54,12 +54,12 @@ impl Node8 {
 /// component would give 0 · ∞ = NaN where a box face passes through the
 /// origin; ±10⁻³⁰ keeps every product finite and the sign (so the near and
 /// far faces) of the component.
-const TINY: f32 = 1e-30;
+pub(crate) const TINY: f32 = 1e-30;
 
 /// Relative widening of the far distance, so that rounding never drops a
 /// box the ray touches (Ize, "Robust BVH Ray Traversal", JCGT 2013: 1 + 2γ₃
 /// for a subtraction and a multiplication; a little more here).
-const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
+pub(crate) const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// A ray prepared for the slab test: inverse direction, origin times it,
 /// and which face of each axis it meets first.

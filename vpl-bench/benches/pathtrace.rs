@@ -73,7 +73,33 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+    // The interleaved gather (128 VPLs per pixel from 2048, shadow-map visibility) and the
+    // cross-bilateral filter at 640×360 on `office`, all threads.
+    let mut g = c.benchmark_group("shading");
+    g.sample_size(20);
+    let s = SceneSetup::load("office").unwrap();
+    let camera = s.camera.with_resolution((640, 360)).unwrap();
+    let gbuf = vpl_shading::render_gbuffer(&s.scene, &camera);
+    let set = vpl_sampling::InstantRadiosity::new(vpl_sampling::IrConfig { vpls: 2048, ..Default::default() })
+        .unwrap()
+        .sample(&s.scene, 0)
+        .clone();
+    let mut maps = vpl_visibility::ShadowMaps::new(128).unwrap();
+    vpl_core::VplVisibility::update(&mut maps, &s.scene, &set);
+    let mut shader = vpl_shading::InterleavedShader::new(Some(vpl_core::GeometryClamp::for_view(2048, &s.scene, &camera)), 0);
+    g.throughput(Throughput::Elements(640 * 360 * 128));
+    g.bench_function("office_640x360_gather", |b| b.iter(|| shader.irradiance(&gbuf, &set, &maps)));
+    let e = shader.irradiance(&gbuf, &set, &maps);
+    let filter = vpl_shading::CrossBilateral::default();
+    g.throughput(Throughput::Elements(640 * 360));
+    g.bench_function("office_640x360_filter", |b| b.iter(|| filter.apply(&gbuf, &e)));
+    g.finish();
 }
 
-criterion_group!(benches, bench);
+// No plots: criterion's plotting backend panics on machines without fonts.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

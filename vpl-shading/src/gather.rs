@@ -1,7 +1,6 @@
 //! The VPL-major inner loop both shaders share: one VPL at a time over a
 //! batch of receivers, so its visibility data stays in cache.
 
-use vpl_core::glam::Vec3;
 use vpl_core::{GeometryClamp, Receivers, VplSet, VplVisibility};
 use vpl_visibility::ShadowMaps;
 
@@ -35,7 +34,7 @@ pub(crate) fn gather(
     let n = rx.len();
     let g_max = clamp.map_or(f32::INFINITY, |c| c.g_max);
     if let Some(sm) = vis.as_any().downcast_ref::<ShadowMaps>() {
-        return gather_shadow_maps(rx, vpls, slots, sm, g_max, sums);
+        return crate::gather_maps::gather_shadow_maps(rx, vpls, slots, sm, g_max, sums);
     }
     w.resize(n, 0.0);
     for &slot in slots {
@@ -68,99 +67,6 @@ pub(crate) fn gather(
     }
 }
 
-/// Lanes of the SIMD shadow-map loop.
-const LANES: usize = 8;
-
-/// [`gather`] with shadow-map visibility, fused into one pass per VPL and
-/// eight receivers wide: the arithmetic of [`vpl_visibility::MapView::visible`]
-/// lane by lane, without the weight array and the per-VPL dynamic call.
-fn gather_shadow_maps(rx: &Receivers, vpls: &VplSet, slots: &[u32], sm: &ShadowMaps, g_max: f32, sums: &mut Sums) {
-    use wide::{CmpGt, CmpLe, f32x8};
-    let n = rx.len();
-    let full = n / LANES * LANES;
-    let load = |a: &[f32], i: usize| f32x8::from(<[f32; LANES]>::try_from(&a[i..i + LANES]).expect("eight lanes"));
-    let zero = f32x8::ZERO;
-    let one = f32x8::ONE;
-    for &slot in slots {
-        let Some(v) = vpls.get(slot as usize) else { continue };
-        let Some(view) = sm.view(slot as usize) else { continue };
-        let (y, n_y, o, f) = (v.y, v.n, view.origin, v.flux);
-        let fr = view.frame();
-        let (eps2, texel) = view.bias_terms();
-        let half = f32x8::splat(view.half());
-        let s8 = |x: f32| f32x8::splat(x);
-        let (yx, yy, yz) = (s8(y.x), s8(y.y), s8(y.z));
-        let (nyx, nyy, nyz) = (s8(n_y.x), s8(n_y.y), s8(n_y.z));
-        let (ox, oy, oz) = (s8(o.x), s8(o.y), s8(o.z));
-        let gmax = s8(g_max);
-        for i in (0..full).step_by(LANES) {
-            let (px, py, pz) = (load(&rx.px, i), load(&rx.py, i), load(&rx.pz, i));
-            let (nx, ny, nz) = (load(&rx.nx, i), load(&rx.ny, i), load(&rx.nz, i));
-            let (dx, dy, dz) = (px - yx, py - yy, pz - yz);
-            let d2 = (dx * dx + dy * dy) + dz * dz;
-            let cos_y = (nyx * dx + nyy * dy) + nyz * dz;
-            let cos_x = -((nx * dx + ny * dy) + nz * dz);
-            let lit = cos_y.cmp_gt(zero) & cos_x.cmp_gt(zero) & d2.cmp_gt(zero);
-            if lit.none() {
-                continue;
-            }
-            let gt = (cos_y * cos_x / (d2 * d2)).min(gmax);
-            // Visibility, as MapView::visible.
-            let (ex, ey, ez) = (px - ox, py - oy, pz - oz);
-            let e2 = (ex * ex + ey * ey) + ez * ez;
-            let cos_xo = -((nx * ex + ny * ey) + nz * ez);
-            let inv = one / e2.sqrt();
-            let dist = e2 * inv;
-            let lz = ((ex * s8(fr.n.x) + ey * s8(fr.n.y)) + ez * s8(fr.n.z)) * inv;
-            let k = inv / (one + lz);
-            let u = (((ex * s8(fr.s.x) + ey * s8(fr.s.y)) + ez * s8(fr.s.z)) * k + one) * half;
-            let w = (((ex * s8(fr.t.x) + ey * s8(fr.t.y)) + ez * s8(fr.t.z)) * k + one) * half;
-            let (ua, wa, la) = (u.to_array(), w.to_array(), lit.to_array());
-            let mut depth = [0.0f32; LANES];
-            for l in 0..LANES {
-                if la[l] != 0.0 {
-                    depth[l] = view.depth_at(ua[l], wa[l]);
-                }
-            }
-            let cos_r = (cos_xo * inv).abs();
-            let tan = ((one - cos_r * cos_r).max(zero).sqrt() / cos_r.max(s8(0.1))).min(s8(10.0));
-            let bias = s8(eps2) + s8(texel) * dist * (one + lz) * (s8(0.5) + tan);
-            let seen = (dist - bias).cmp_le(f32x8::from(depth)) & lz.cmp_gt(zero);
-            let seen = seen | e2.cmp_le(zero);
-            let m = lit & seen;
-            if m.none() {
-                continue;
-            }
-            let wgt = m.blend(gt, zero);
-            let acc = |a: &mut [f32], c: f32| {
-                let v = load(a, i) + s8(c) * wgt;
-                a[i..i + LANES].copy_from_slice(&v.to_array());
-            };
-            acc(&mut sums.r, f.x);
-            acc(&mut sums.g, f.y);
-            acc(&mut sums.b, f.z);
-        }
-        // The remainder, one receiver at a time.
-        for i in full..n {
-            let d = Vec3::new(rx.px[i] - y.x, rx.py[i] - y.y, rx.pz[i] - y.z);
-            let n_x = Vec3::new(rx.nx[i], rx.ny[i], rx.nz[i]);
-            let d2 = d.length_squared();
-            let cos_y = n_y.dot(d);
-            let cos_x = -n_x.dot(d);
-            if cos_y <= 0.0 || cos_x <= 0.0 || d2 <= 0.0 {
-                continue;
-            }
-            let gt = (cos_y * cos_x / (d2 * d2)).min(g_max);
-            let d_o = Vec3::new(rx.px[i] - o.x, rx.py[i] - o.y, rx.pz[i] - o.z);
-            if view.visible(d_o, d_o.length_squared(), -n_x.dot(d_o)) {
-                sums.r[i] += f.x * gt;
-                sums.g[i] += f.y * gt;
-                sums.b[i] += f.z * gt;
-            }
-        }
-    }
-}
-
 /// Receivers `s..e` of `rx` as their own batch.
 pub(crate) fn slice(rx: &Receivers, s: usize, e: usize) -> Receivers {
     Receivers {
@@ -177,6 +83,7 @@ pub(crate) fn slice(rx: &Receivers, s: usize, e: usize) -> Receivers {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use vpl_core::glam::Vec3;
     use vpl_core::{GBuffer, Scene, SceneSetup, VisibilityUpdate};
 
     /// Shadow maps behind a wrapper the fast path does not recognise.
@@ -200,27 +107,51 @@ mod tests {
         }
     }
 
+    /// The fused shadow-map loop against the generic one (exact
+    /// divisions and square roots, `MapView::visible`), pair by pair over
+    /// 200 VPLs and 2,257 receivers on `cornell` and `office`: where both
+    /// see the VPL, weights within 10⁻⁶ relative (the bound of the
+    /// approximations, see `gather_maps`); a visibility decision differs
+    /// for at most 10⁻⁴ of the lit pairs (only where the depth test is
+    /// decided within the approximations' error). The AVX2 and portable
+    /// implementations give the same bits.
     #[test]
     fn fused_shadow_map_loop_matches_the_generic_one() {
-        let setup = SceneSetup::load("cornell").unwrap();
-        let camera = setup.camera.with_resolution((37, 29)).unwrap();
-        let gbuf: GBuffer = crate::render_gbuffer(&setup.scene, &camera);
-        let set =
-            vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 200, ..Default::default() }).unwrap().sample(&setup.scene, 2).clone();
-        let mut sm = ShadowMaps::new(64).unwrap();
-        sm.update(&setup.scene, &set);
-        let opaque = Opaque(sm.clone());
-        let rx = gbuf.receivers(0..gbuf.samples.len() as u32);
-        let slots: Vec<u32> = (0..set.len() as u32).collect();
-        let clamp = Some(GeometryClamp::new(50.0));
-        let (mut a, mut b) = (Sums::zeros(rx.len()), Sums::zeros(rx.len()));
-        gather(&rx, &set, &slots, &sm, clamp, &mut a, &mut Vec::new());
-        gather(&rx, &set, &slots, &opaque, clamp, &mut b, &mut Vec::new());
-        let total: f32 = a.r.iter().sum();
-        assert!(total > 0.0);
-        for i in 0..rx.len() {
-            assert!((a.r[i] - b.r[i]).abs() <= 1e-5 * b.r[i].abs().max(1e-3), "receiver {i}: {} vs {}", a.r[i], b.r[i]);
-            assert!((a.b[i] - b.b[i]).abs() <= 1e-5 * b.b[i].abs().max(1e-3));
+        for name in ["cornell", "office"] {
+            let setup = SceneSetup::load(name).unwrap();
+            let camera = setup.camera.with_resolution((61, 37)).unwrap();
+            let gbuf: GBuffer = crate::render_gbuffer(&setup.scene, &camera);
+            let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 200, ..Default::default() })
+                .unwrap()
+                .sample(&setup.scene, 2)
+                .clone();
+            let mut sm = ShadowMaps::new(64).unwrap();
+            sm.update(&setup.scene, &set);
+            let opaque = Opaque(sm.clone());
+            let rx = gbuf.receivers(0..gbuf.samples.len() as u32);
+            let clamp = Some(GeometryClamp::new(50.0));
+            let g_max = GeometryClamp::new(50.0).g_max;
+            let (mut lit, mut flips, mut worst) = (0usize, 0usize, 0f32);
+            for slot in 0..set.len() as u32 {
+                let (mut a, mut b, mut c) = (Sums::zeros(rx.len()), Sums::zeros(rx.len()), Sums::zeros(rx.len()));
+                gather(&rx, &set, &[slot], &sm, clamp, &mut a, &mut Vec::new());
+                gather(&rx, &set, &[slot], &opaque, clamp, &mut b, &mut Vec::new());
+                crate::gather_maps::gather_shadow_maps_portable(&rx, &set, &[slot], &sm, g_max, &mut c);
+                assert_eq!((&a.r, &a.g, &a.b), (&c.r, &c.g, &c.b), "{name}, VPL {slot}: AVX2 and portable");
+                for i in 0..rx.len() {
+                    let (x, y) = (a.r[i] + a.g[i] + a.b[i], b.r[i] + b.g[i] + b.b[i]);
+                    lit += (y > 0.0) as usize;
+                    if (x > 0.0) != (y > 0.0) {
+                        flips += 1;
+                    } else if y > 0.0 {
+                        worst = worst.max(((x - y) / y).abs());
+                    }
+                }
+            }
+            eprintln!("{name}: {lit} lit pairs, {flips} visibility decisions differ, weights within {worst:e}");
+            assert!(lit > 10_000, "{name}: {lit}");
+            assert!(worst <= 1e-6, "{name}: weights within {worst:e}");
+            assert!(flips as f64 <= 1e-4 * lit as f64, "{name}: {flips} of {lit} decisions differ");
         }
     }
 }

@@ -2,7 +2,7 @@
 //! pixel of a 4×4 tile shades with its own sixteenth of the VPLs, and a
 //! cross-bilateral filter removes the structured noise (Hedman et al. 2017, §4).
 
-use crate::filter::CrossBilateral;
+use crate::filter::{CrossBilateral, Planes};
 use crate::gather::{Sums, gather, slice};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
@@ -48,12 +48,21 @@ pub struct InterleavedShader {
     pub seed: u64,
     subsets: Option<(usize, Vec<Vec<u32>>)>,
     timings: ShadeTimings,
+    /// The filter's planes, reused from frame to frame.
+    planes: Planes,
 }
 
 impl InterleavedShader {
     /// A shader with `clamp`, the default filter and `seed`.
     pub fn new(clamp: Option<GeometryClamp>, seed: u64) -> Self {
-        InterleavedShader { clamp, filter: Some(CrossBilateral::default()), seed, subsets: None, timings: ShadeTimings::default() }
+        InterleavedShader {
+            clamp,
+            filter: Some(CrossBilateral::default()),
+            seed,
+            subsets: None,
+            timings: ShadeTimings::default(),
+            planes: Planes::default(),
+        }
     }
 
     /// Timings of the last shade.
@@ -134,7 +143,7 @@ impl IndirectShader for InterleavedShader {
         // Filter the demodulated sums E, then multiply by ρ/π: the filter
         // never blurs albedo across edges.
         let mut e = match &self.filter {
-            Some(f) => f.apply(gbuf, &e),
+            Some(f) => f.apply_with(gbuf, &e, &mut self.planes),
             None => e,
         };
         let t2 = Instant::now();

@@ -62,6 +62,7 @@ mod direct;
 mod exhaustive;
 mod filter;
 mod gather;
+mod gather_maps;
 mod gbuffer;
 mod interleaved;
 

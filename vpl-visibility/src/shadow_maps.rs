@@ -189,6 +189,11 @@ impl<'a> MapView<'a> {
         self.depth[j * self.res + i]
     }
 
+    /// The texels' depths, row-major, and the side of the map.
+    pub fn depths(&self) -> (&'a [f32], usize) {
+        (self.depth, self.res)
+    }
+
     /// Half the resolution: texel coordinate = (u + 1) · half.
     pub fn half(&self) -> f32 {
         self.half

@@ -39,6 +39,12 @@ pub struct RaySets {
     pub primary: Vec<Ray>,
     /// One cosine-distributed ray from each primary hit.
     pub diffuse: Vec<Ray>,
+    /// The primary rays' directions in tiles of 8 × 8 pixels (for
+    /// [`fan_rate`]).
+    pub primary_tiles: Vec<Vec<Vec3>>,
+    /// The camera's centre of projection, where all primary rays start
+    /// (`None` for a thin lens).
+    pub eye: Option<Vec3>,
     /// One segment from each primary hit toward a light sample.
     pub shadow: Vec<Ray>,
 }
@@ -75,8 +81,48 @@ impl RaySets {
             .collect();
         let diffuse = secondary.iter().filter_map(|s| s.0).collect();
         let shadow = secondary.iter().filter_map(|s| s.1).collect();
-        RaySets { primary, diffuse, shadow }
+        // The primary rays' directions again, tile by tile of 8 × 8 pixels.
+        let tile = 8;
+        let mut primary_tiles = Vec::new();
+        for y0 in (0..h).step_by(tile) {
+            for x0 in (0..w).step_by(tile) {
+                let t: Vec<Vec3> = (y0..(y0 + tile as u32).min(h))
+                    .flat_map(|y| (x0..(x0 + tile as u32).min(w)).map(move |x| (x, y)))
+                    .map(|(x, y)| primary[(y * w + x) as usize].d)
+                    .collect();
+                primary_tiles.push(t);
+            }
+        }
+        let eye = (camera.lens_radius <= 0.0).then_some(camera.origin);
+        RaySets { primary, diffuse, shadow, primary_tiles, eye }
     }
+}
+
+/// Closest-hit throughput of rays from one origin traced in bundles
+/// ([`Bvh::closest_fan`]): `tiles` of directions from `eye`, as the fastest
+/// of repeated passes over at least `min_seconds`.
+pub fn fan_rate(bvh: &Bvh, eye: Vec3, tiles: &[Vec<Vec3>], min_seconds: f64) -> Rate {
+    let rays = tiles.iter().map(Vec::len).sum();
+    let mut best = Rate { rays, seconds: f64::INFINITY, hits: 0 };
+    let start = Instant::now();
+    let mut passes = 0;
+    while passes < 2 || start.elapsed().as_secs_f64() < min_seconds {
+        let t0 = Instant::now();
+        let hits: usize = tiles
+            .par_iter()
+            .map(|dirs| {
+                let mut out = vec![None; dirs.len()];
+                bvh.closest_fan(eye, dirs, f32::INFINITY, &mut out);
+                out.iter().filter(|h| h.is_some()).count()
+            })
+            .sum();
+        let s = t0.elapsed().as_secs_f64();
+        if passes > 0 && s < best.seconds {
+            best = Rate { rays, seconds: s, hits };
+        }
+        passes += 1;
+    }
+    best
 }
 
 /// Rays answered in a time.

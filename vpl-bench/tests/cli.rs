@@ -329,7 +329,7 @@ fn bench_rays_prints_a_row_per_scene_and_copies() {
     assert!(rows[0].starts_with("| cornell | 36 |") && rows[2].starts_with("| office ×3 |"), "{text}");
     for r in rows {
         let rates: Vec<f64> = r.split('|').map(str::trim).filter(|c| !c.is_empty()).skip(5).map(|c| c.parse().unwrap()).collect();
-        assert!(rates.len() == 3 && rates.iter().all(|&v| v > 0.0), "{r}");
+        assert!(rates.len() == 4 && rates.iter().all(|&v| v > 0.0), "{r}");
     }
 }
 

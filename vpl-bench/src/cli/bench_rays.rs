@@ -2,7 +2,7 @@
 //! closest hits and occlusion, on scenes of growing size.
 
 use super::*;
-use crate::rays::{RaySets, closest_rate, occluded_rate, side_by_side, timed_build};
+use crate::rays::{RaySets, closest_rate, fan_rate, occluded_rate, side_by_side, timed_build};
 use crate::table1::rows::scenes_dir;
 
 /// BVH build time and memory, and M rays/s for primary and diffuse closest hits and shadow
@@ -55,8 +55,10 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         pool.current_num_threads(),
         if vpl_core::bvh::Bvh::build(&[]).is_ok_and(|b| b.uses_avx2()) { "AVX2 and FMA" } else { "SSE2" }
     );
-    println!("| scene | triangles | build (ms) | BVH (MiB) | nodes | primary (M rays/s) | diffuse (M rays/s) | shadow (M rays/s) |");
-    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    println!(
+        "| scene | triangles | build (ms) | BVH (MiB) | nodes | primary (M rays/s) | primary, 8×8 bundles (M rays/s) | diffuse (M rays/s) | shadow (M rays/s) |"
+    );
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     let last = scenes.len() - 1;
     for (i, spec) in scenes.iter().enumerate() {
         let setup = SceneSetup::load(spec).map_err(|e| e.to_string())?;
@@ -69,20 +71,22 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         }
         for (label, tris) in rows {
             let (bvh, build) = pool.install(|| timed_build(&tris, seconds.min(2.0))).map_err(|e| e.to_string())?;
-            let (p, d, s) = pool.install(|| {
+            let (p, f, d, s) = pool.install(|| {
                 (
                     closest_rate(&bvh, &sets.primary, seconds),
+                    sets.eye.map(|eye| fan_rate(&bvh, eye, &sets.primary_tiles, seconds)),
                     closest_rate(&bvh, &sets.diffuse, seconds),
                     occluded_rate(&bvh, &sets.shadow, seconds),
                 )
             });
             println!(
-                "| {label} | {} | {:.2} | {:.2} | {} | {:.2} | {:.2} | {:.2} |",
+                "| {label} | {} | {:.2} | {:.2} | {} | {:.2} | {} | {:.2} | {:.2} |",
                 tris.len(),
                 build * 1e3,
                 bvh.memory_bytes() as f64 / (1 << 20) as f64,
                 bvh.node_count(),
                 p.rays_per_second() / 1e6,
+                f.map_or("–".to_string(), |f| format!("{:.2}", f.rays_per_second() / 1e6)),
                 d.rays_per_second() / 1e6,
                 s.rays_per_second() / 1e6
             );

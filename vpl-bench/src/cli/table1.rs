@@ -134,8 +134,11 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         );
     }
     if shard.is_none() {
-        pool.install(|| table1::merge(&out)).map_err(|e| e.to_string())?;
+        let results = pool.install(|| table1::merge(&out)).map_err(|e| e.to_string())?;
         if !quiet {
+            if let Some(e) = &results.full_estimate {
+                eprintln!("vpl: table1: estimated {}", table1::report::estimate_line(e));
+            }
             eprintln!("vpl: table1 -> {}", out.join("table1.md").display());
         }
     }

@@ -12,6 +12,7 @@
 //! split with `--shard i/n` (unit k goes to shard k mod n) therefore merges
 //! to exactly the bits of an unsplit one.
 
+pub mod estimate;
 pub mod report;
 pub mod rows;
 pub mod stats;
@@ -344,6 +345,9 @@ pub struct TruthUnit {
     pub stderr: Vec<[f32; 3]>,
     /// Samples per pixel.
     pub samples: u64,
+    /// Wall time of the unit in seconds (0 in units of older versions).
+    #[serde(default)]
+    pub seconds: f64,
 }
 
 /// One method's run of a sequence.
@@ -580,6 +584,7 @@ fn run_method(
 }
 
 fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Table1Error> {
+    let start = Instant::now();
     let setup = row.setup()?;
     let (scene, camera) = setup.frame(frame)?;
     let camera = camera.with_resolution(spec.size)?;
@@ -603,6 +608,7 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
         mean: t.iter().map(|p| p.mean.to_array()).collect(),
         stderr: t.iter().map(|p| p.stderr.to_array()).collect(),
         samples: spec.truth_spp as u64,
+        seconds: start.elapsed().as_secs_f64(),
     })
 }
 
@@ -664,6 +670,11 @@ pub struct Table1Results {
     pub spec: Table1Spec,
     /// Per row.
     pub rows: Vec<RowResult>,
+    /// What the full profile would take on the machine of this run, from
+    /// its measured costs (`None` where the full profile's sequences
+    /// cannot be read, or share none with the run).
+    #[serde(default)]
+    pub full_estimate: Option<estimate::FullEstimate>,
 }
 
 /// Reads every unit of the run in `dir` and computes the table; errs
@@ -678,7 +689,9 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
     }
     let mut rows_out = Vec::new();
     let mut runs = Vec::new();
+    let mut truth_seconds: estimate::TruthSeconds = Vec::new();
     for (ri, run) in spec.rows.iter().enumerate() {
+        let mut row_truth = Some(0.0);
         let row = rows::row(&run.id).expect("validated");
         let mut truth = Vec::new();
         let mut se_sum = 0.0;
@@ -687,12 +700,14 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             let path = dir.join(spec.unit_file(Unit::Truth { row: ri, frame: f }));
             let t: TruthUnit = read_json(&path)?;
             check_unit(&path, &t.settings, &spec)?;
+            row_truth = row_truth.filter(|_| t.seconds > 0.0).map(|s| s + t.seconds);
             truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
             for (m, s) in t.mean.iter().zip(&t.stderr) {
                 se_sum += tone_mapped_stderr(Vec3::from(*m), Vec3::from(*s));
                 se_n += 1;
             }
         }
+        truth_seconds.push(row_truth);
         let pixels = row.tracked.len();
         let draws = stats::Draws::new(spec.seeds as usize, pixels, spec.seed, ri as u64);
         let mut methods = Vec::new();
@@ -760,7 +775,8 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
             comparisons,
         });
     }
-    Ok((Table1Results { spec, rows: rows_out }, runs))
+    let full_estimate = Table1Spec::full().ok().and_then(|full| estimate::estimate(&spec, &runs, &truth_seconds, &full));
+    Ok((Table1Results { spec, rows: rows_out, full_estimate }, runs))
 }
 
 /// Merges the run in `dir` and writes `table1.md`, `table1.csv`,

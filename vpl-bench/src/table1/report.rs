@@ -210,6 +210,14 @@ pub fn markdown(r: &Table1Results) -> String {
             row.pixels.iter().enumerate().map(|(i, ((x, y), l))| format!("{i} ({x}, {y}) {l}")).collect::<Vec<_>>().join("; ")
         );
     }
+    if let Some(e) = &r.full_estimate {
+        let _ = writeln!(
+            md,
+            "\n## Cost\n\nFrom this run's measured costs (each unit's time plus the frames a whole sequence adds at its median \
+             time per frame; ground truth per frame scaled to the paper's samples), on the same machine and threads: {}.",
+            estimate_line(e)
+        );
+    }
     md
 }
 
@@ -318,6 +326,26 @@ fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
         line_chart(&dir.join(format!("fig7_{}.png", row.id)), &chart, &series)?;
     }
     Ok(data)
+}
+
+/// The estimate's line: "… h for the full profile (… method runs, …
+/// ground truth)".
+pub fn estimate_line(e: &super::estimate::FullEstimate) -> String {
+    let h = |s: f64| s / 3600.0;
+    match e.truth_seconds {
+        Some(t) => format!(
+            "{:.1} h for the full profile of these methods on {} ({:.1} h method runs, {:.1} h ground truth)",
+            h(e.total_seconds()),
+            e.rows.join(", "),
+            h(e.method_seconds),
+            h(t)
+        ),
+        None => format!(
+            "{:.1} h of method runs for the full profile of these methods on {} (ground truth not timed)",
+            h(e.method_seconds),
+            e.rows.join(", ")
+        ),
+    }
 }
 
 /// Writes every Table 1 file into `dir`.

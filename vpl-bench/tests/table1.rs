@@ -65,6 +65,9 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     assert!(md.contains("bias and how much noise") && md.contains("bootstrap"), "{md}");
     assert!(read(&whole, "table1.csv").lines().count() == 3);
     assert!(whole.join("fig7_maze.png").exists());
+    // The wall times and the estimate of the full profile, apart from the tables (they differ run to run).
+    let cost = read(&whole, "cost.md");
+    assert!(cost.contains("for the full profile of these methods on maze") && cost.contains("ground truth)"), "{cost}");
 
     // A second call finds every unit done and keeps it.
     let again = table1::run(&reg, &spec, &whole, Shard::ALL, &mut |_| {}).unwrap();

@@ -58,8 +58,8 @@ struct Map {
 #[derive(Clone, Debug)]
 pub struct ShadowMaps {
     res: u32,
-    /// The local direction of each texel's centre, row-major (the same
-    /// for every map).
+    /// The local direction of each texel's centre, tile by tile of
+    /// [`TILE`]² texels and row by row inside a tile (the same for every map).
     texels: Vec<Vec3>,
     maps: Vec<Option<Map>>,
     eps: f32,
@@ -75,7 +75,18 @@ impl ShadowMaps {
         }
         let scale = 2.0 / res as f32;
         let centre = |k: u32| (k as f32 + 0.5) * scale - 1.0;
-        let texels = (0..res * res).map(|k| paraboloid_to_direction(Vec2::new(centre(k % res), centre(k / res)))).collect();
+        // Tile by tile (as `render` traces them), row by row inside a tile.
+        let res_u = res as usize;
+        let mut texels = Vec::with_capacity(res_u * res_u);
+        for j0 in (0..res_u).step_by(TILE) {
+            for i0 in (0..res_u).step_by(TILE) {
+                for j in j0..(j0 + TILE).min(res_u) {
+                    for i in i0..(i0 + TILE).min(res_u) {
+                        texels.push(paraboloid_to_direction(Vec2::new(centre(i as u32), centre(j as u32))));
+                    }
+                }
+            }
+        }
         Ok(ShadowMaps { res, texels, maps: Vec::new(), eps: 0.0, bias_scale: 1.0 })
     }
 
@@ -99,17 +110,19 @@ impl ShadowMaps {
         let res = res as usize;
         let mut depth = vec![0.0f32; res * res];
         depth.par_chunks_mut(TILE * res).enumerate().for_each(|(band, rows)| {
-            let (j0, h) = (band * TILE, rows.len() / res);
+            let h = rows.len() / res;
+            // The band's texels are consecutive in the table.
+            let mut local = &texels[band * TILE * res..];
             let mut dirs = [Vec3::ZERO; TILE * TILE];
             let mut hits = [None; TILE * TILE];
             for i0 in (0..res).step_by(TILE) {
                 let w = TILE.min(res - i0);
-                for dj in 0..h {
-                    for di in 0..w {
-                        dirs[dj * w + di] = frame.to_world(texels[(j0 + dj) * res + i0 + di]);
-                    }
+                let n = w * h;
+                for (d, l) in dirs.iter_mut().zip(&local[..n]) {
+                    *d = frame.to_world(*l);
                 }
-                scene.closest_fan(origin, &dirs[..w * h], &mut hits);
+                local = &local[n..];
+                scene.closest_fan(origin, &dirs[..n], &mut hits);
                 for dj in 0..h {
                     for di in 0..w {
                         rows[dj * res + i0 + di] = hits[dj * w + di].map_or(f32::INFINITY, |(_, t)| t);

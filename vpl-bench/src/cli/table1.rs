@@ -134,9 +134,9 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         );
     }
     if shard.is_none() {
-        let results = pool.install(|| table1::merge(&out)).map_err(|e| e.to_string())?;
+        let (_, cost) = pool.install(|| table1::merge_with_cost(&out)).map_err(|e| e.to_string())?;
         if !quiet {
-            if let Some(e) = &results.full_estimate {
+            if let Some(e) = &cost {
                 eprintln!("vpl: table1: estimated {}", table1::report::estimate_line(e));
             }
             eprintln!("vpl: table1 -> {}", out.join("table1.md").display());

@@ -670,16 +670,14 @@ pub struct Table1Results {
     pub spec: Table1Spec,
     /// Per row.
     pub rows: Vec<RowResult>,
-    /// What the full profile would take on the machine of this run, from
-    /// its measured costs (`None` where the full profile's sequences
-    /// cannot be read, or share none with the run).
-    #[serde(default)]
-    pub full_estimate: Option<estimate::FullEstimate>,
 }
 
 /// Reads every unit of the run in `dir` and computes the table; errs
 /// naming a missing unit.
-pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Error> {
+/// Also returns the method units and what the full profile would take on
+/// the machine of this run, from its measured costs (`None` where the full
+/// profile's sequences cannot be read, or share none with the run).
+pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<estimate::FullEstimate>), Table1Error> {
     let spec: Table1Spec = read_json(&dir.join("spec.json"))?;
     spec.validate_settings()?;
     let units = spec.units();
@@ -776,13 +774,19 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>), Table1Err
         });
     }
     let full_estimate = Table1Spec::full().ok().and_then(|full| estimate::estimate(&spec, &runs, &truth_seconds, &full));
-    Ok((Table1Results { spec, rows: rows_out, full_estimate }, runs))
+    Ok((Table1Results { spec, rows: rows_out }, runs, full_estimate))
 }
 
 /// Merges the run in `dir` and writes `table1.md`, `table1.csv`,
-/// `table1.json`, `fig7_<row>.png` and `fig7.csv` there.
+/// `table1.json`, `fig7_<row>.png` and `fig7.csv` there (the same bits
+/// from any sharding), and the wall times: `runs.csv` and `cost.md`.
 pub fn merge(dir: &Path) -> Result<Table1Results, Table1Error> {
-    let (results, runs) = collect(dir)?;
-    report::write(dir, &results, &runs)?;
-    Ok(results)
+    Ok(merge_with_cost(dir)?.0)
+}
+
+/// [`merge`], also returning the estimate of the full profile written to `cost.md`.
+pub fn merge_with_cost(dir: &Path) -> Result<(Table1Results, Option<estimate::FullEstimate>), Table1Error> {
+    let (results, runs, cost) = collect(dir)?;
+    report::write(dir, &results, &runs, cost.as_ref())?;
+    Ok((results, cost))
 }

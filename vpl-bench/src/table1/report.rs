@@ -210,14 +210,6 @@ pub fn markdown(r: &Table1Results) -> String {
             row.pixels.iter().enumerate().map(|(i, ((x, y), l))| format!("{i} ({x}, {y}) {l}")).collect::<Vec<_>>().join("; ")
         );
     }
-    if let Some(e) = &r.full_estimate {
-        let _ = writeln!(
-            md,
-            "\n## Cost\n\nFrom this run's measured costs (each unit's time plus the frames a whole sequence adds at its median \
-             time per frame; ground truth per frame scaled to the paper's samples), on the same machine and threads: {}.",
-            estimate_line(e)
-        );
-    }
     md
 }
 
@@ -348,13 +340,41 @@ pub fn estimate_line(e: &super::estimate::FullEstimate) -> String {
     }
 }
 
+/// `cost.md`: the wall times of the run and the estimate of the full profile.
+fn cost_md(runs: &[MethodUnit], cost: Option<&super::estimate::FullEstimate>) -> String {
+    let mut md = String::from(
+        "# Cost of the Table 1 run
+
+",
+    );
+    let seconds: f64 = runs.iter().map(|u| u.seconds).sum();
+    let _ = writeln!(
+        md,
+        "Method units: {seconds:.0} s of wall time in all (per unit and stage: `runs.csv`).
+"
+    );
+    match cost {
+        Some(e) => {
+            let _ = writeln!(
+                md,
+                "From this run's measured costs (each unit's time plus the frames a whole sequence adds at its median \
+                 time per frame; ground truth per frame scaled to the paper's samples), on the same machine and threads: {}.",
+                estimate_line(e)
+            );
+        }
+        None => md.push_str("No estimate of the full profile: its sequences could not be read, or share none with this run.\n"),
+    }
+    md
+}
+
 /// Writes every Table 1 file into `dir`.
-pub fn write(dir: &Path, r: &Table1Results, runs: &[MethodUnit]) -> Result<(), Table1Error> {
+pub fn write(dir: &Path, r: &Table1Results, runs: &[MethodUnit], cost: Option<&super::estimate::FullEstimate>) -> Result<(), Table1Error> {
     write_atomic(&dir.join("table1.md"), markdown(r).as_bytes())?;
     write_atomic(&dir.join("table1.csv"), csv(r).as_bytes())?;
     let json = serde_json::to_string_pretty(r).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     write_atomic(&dir.join("table1.json"), json.as_bytes())?;
     write_atomic(&dir.join("runs.csv"), runs_csv(runs).as_bytes())?;
+    write_atomic(&dir.join("cost.md"), cost_md(runs, cost).as_bytes())?;
     let data = fig7(dir, r)?;
     write_atomic(&dir.join("fig7.csv"), data.as_bytes())?;
     Ok(())

@@ -320,9 +320,10 @@ impl Bvh {
         let lane =
             Group { d: [[0.0; GROUP]; 3], inv: [[0.0; GROUP]; 3], len: [0.0; GROUP], best_t: [t_end; GROUP], best: [u32::MAX; GROUP] };
         let mut b = Bundle { groups: [lane; FAN / GROUP] };
-        for (k, g) in b.groups.iter_mut().enumerate() {
-            for i in 0..GROUP {
-                let d = dirs.get(k * GROUP + i).unwrap_or(&dirs[0]);
+        let mut all = [dirs[0]; FAN];
+        all[..dirs.len()].copy_from_slice(dirs);
+        for (g, dirs) in b.groups.iter_mut().zip(all.chunks_exact(GROUP)) {
+            for (i, d) in dirs.iter().enumerate() {
                 for a in 0..3 {
                     g.d[a][i] = d[a];
                 }

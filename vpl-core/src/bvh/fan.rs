@@ -367,26 +367,9 @@ impl Bvh {
                     inside[i] &= s >= -slack;
                 }
             }
-            // The entered children, nearest last so that it is popped first.
             let r2 = reach * reach;
-            let mut entered = [(0u32, 0f32, 0u32); WIDTH];
-            let mut k = 0;
-            for i in 0..WIDTH {
-                if !(inside[i] && dist2[i] <= r2) {
-                    continue;
-                }
-                let e = (n.child[i], dist2[i], (node * WIDTH + i) as u32);
-                let mut j = k;
-                while j > 0 && entered[j - 1].1 < e.1 {
-                    entered[j] = entered[j - 1];
-                    j -= 1;
-                }
-                entered[j] = e;
-                k += 1;
-            }
-            for e in &entered[..k] {
-                stack.push(*e);
-            }
+            let entered = (0..WIDTH).filter(|&i| inside[i] && dist2[i] <= r2).map(|i| (n.child[i], dist2[i], (node * WIDTH + i) as u32));
+            stack.push_nearest_last(entered, |e| e.1);
             // The next inner node; leaves on the way are tested.
             loop {
                 let Some((child, d2, at)) = stack.pop() else {
@@ -511,14 +494,7 @@ mod tests {
     /// all hit it.
     #[test]
     fn no_ray_of_a_bundle_slips_between_triangles() {
-        let centre = Vec3::new(0.1, 0.7, 0.3);
-        let ring: Vec<Vec3> = (0..8)
-            .map(|i| {
-                let a = i as f32 * std::f32::consts::TAU / 8.0 + 0.1;
-                centre + Vec3::new(a.cos() * 1.3, a.sin() * 0.7, 0.05 * (i as f32).sin())
-            })
-            .collect();
-        let fan: Vec<[Vec3; 3]> = (0..8).map(|i| [centre, ring[i], ring[(i + 1) % 8]]).collect();
+        let (centre, ring, fan) = super::super::watertight::shared_edge_fan();
         let bvh = Bvh::build(&fan).unwrap();
         let mut rng = stream(5, 0, Purpose::TEST, 1);
         for b in 0..320 {

@@ -72,6 +72,29 @@ impl<E: Copy> Stack<E> {
         }
     }
 
+    /// Pushes at most [`WIDTH`] entries (a node's entered children) so that
+    /// the one of least `dist` is popped first.
+    #[inline(always)]
+    fn push_nearest_last(&mut self, entries: impl Iterator<Item = E>, dist: impl Fn(&E) -> f32)
+    where
+        E: Default,
+    {
+        let mut sorted = [E::default(); WIDTH];
+        let mut k = 0;
+        for e in entries {
+            let mut j = k;
+            while j > 0 && dist(&sorted[j - 1]) < dist(&e) {
+                sorted[j] = sorted[j - 1];
+                j -= 1;
+            }
+            sorted[j] = e;
+            k += 1;
+        }
+        for e in &sorted[..k] {
+            self.push(*e);
+        }
+    }
+
     #[inline(always)]
     fn pop(&mut self) -> Option<E> {
         if let Some(e) = self.spill.pop() {
@@ -108,7 +131,7 @@ impl Bvh {
     /// Errors: more triangle references than a leaf can address (2²⁸,
     /// about 268 million, splits included).
     pub fn build(vertices: &[[Vec3; 3]]) -> Result<Bvh> {
-        let avx2 = detect_avx2();
+        let avx2 = crate::cpu::has_avx2_fma();
         let mut bvh =
             Bvh { nodes: Vec::new(), tris: Vec::new(), order: Vec::new(), slot_of: vec![u32::MAX; vertices.len()], avx2, extent: 0.0 };
         if vertices.is_empty() {
@@ -241,24 +264,12 @@ impl Bvh {
         loop {
             let n = &self.nodes[node];
             let mut mask = boxes.children_on(self.avx2, n, -BACKSTEP, best_t, &mut t_near);
-            // The entered children, nearest last so that it is popped first.
-            let mut entered = [(0u32, 0f32); WIDTH];
-            let mut k = 0;
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
+            let entered = std::iter::from_fn(|| {
+                let i = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
                 mask &= mask - 1;
-                let e = (n.child[i], t_near[i]);
-                let mut j = k;
-                while j > 0 && entered[j - 1].1 < e.1 {
-                    entered[j] = entered[j - 1];
-                    j -= 1;
-                }
-                entered[j] = e;
-                k += 1;
-            }
-            for e in &entered[..k] {
-                stack.push(*e);
-            }
+                Some((n.child[i], t_near[i]))
+            });
+            stack.push_nearest_last(entered, |e| e.1);
             // The next inner node; leaves on the way are tested.
             loop {
                 let Some((child, t)) = stack.pop() else {
@@ -337,18 +348,6 @@ impl Bvh {
 #[inline(always)]
 fn leaf_range(child: u32) -> (usize, usize) {
     ((child & SLOT_MASK) as usize, ((child >> COUNT_SHIFT) & 7) as usize + 1)
-}
-
-/// Whether this CPU runs the AVX2 and FMA traversal.
-fn detect_avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
 }
 
 /// Folds obvhs's binary tree into 8-wide nodes, depth first (a subtree's

@@ -93,6 +93,22 @@ impl ShearedRay {
     }
 }
 
+/// Eight triangles around a vertex with awkward coordinates, each sharing
+/// an edge with the next: (centre, rim vertices, triangles), for the tests
+/// of watertightness here and in `fan`.
+#[cfg(test)]
+pub(super) fn shared_edge_fan() -> (Vec3, Vec<Vec3>, Vec<[Vec3; 3]>) {
+    let centre = Vec3::new(0.1, 0.7, 0.3);
+    let ring: Vec<Vec3> = (0..8)
+        .map(|i| {
+            let a = i as f32 * std::f32::consts::TAU / 8.0 + 0.1;
+            centre + Vec3::new(a.cos() * 1.3, a.sin() * 0.7, 0.05 * (i as f32).sin())
+        })
+        .collect();
+    let fan = (0..8).map(|i| [centre, ring[i], ring[(i + 1) % 8]]).collect();
+    (centre, ring, fan)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,14 +140,7 @@ mod tests {
     /// points on its edges from random origins.
     #[test]
     fn no_ray_slips_between_triangles_that_share_an_edge() {
-        let centre = Vec3::new(0.1, 0.7, 0.3);
-        let ring: Vec<Vec3> = (0..8)
-            .map(|i| {
-                let a = i as f32 * std::f32::consts::TAU / 8.0 + 0.1;
-                centre + Vec3::new(a.cos() * 1.3, a.sin() * 0.7, 0.05 * (i as f32).sin())
-            })
-            .collect();
-        let fan: Vec<[Vec3; 3]> = (0..8).map(|i| [centre, ring[i], ring[(i + 1) % 8]]).collect();
+        let (centre, ring, fan) = shared_edge_fan();
         let mut rng = crate::rng::stream(5, 0, crate::rng::Purpose::TEST, 0);
         for n in 0..20_000 {
             let i = n % 8;

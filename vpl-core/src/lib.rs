@@ -47,6 +47,7 @@ pub mod builtin;
 pub mod bvh;
 pub mod camera;
 pub mod clamp;
+pub mod cpu;
 pub mod distribution;
 pub mod emission;
 pub mod error;

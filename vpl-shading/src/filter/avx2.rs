@@ -9,7 +9,7 @@ use vpl_core::glam::Vec3;
 /// the CPU lacks AVX2 or FMA.
 #[allow(unsafe_code)] // the call of a function compiled for AVX2 and FMA, made only where the CPU has them
 pub(super) fn row(pl: &Planes, alpha: u32, y: usize, out: &mut [Vec3]) -> bool {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+    if !vpl_core::cpu::has_avx2_fma() {
         return false;
     }
     // SAFETY: the CPU has AVX2 and FMA (checked above).

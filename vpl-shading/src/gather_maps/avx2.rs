@@ -7,16 +7,11 @@ use crate::gather::Sums;
 use std::arch::x86_64::*;
 use vpl_core::Receivers;
 
-/// Whether this CPU has AVX2 and FMA (the detection is cached by std).
-pub(super) fn available() -> bool {
-    is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
-}
-
 /// Adds each light's flux times the weights to `sums`; false (and nothing
 /// added) where the CPU lacks AVX2 or FMA.
 #[allow(unsafe_code)] // the call of a function compiled for AVX2 and FMA, made only where the CPU has them
 pub(super) fn gather<'a>(rx: &Receivers, lights: impl Iterator<Item = Light<'a>>, sums: &mut Sums) -> bool {
-    if !available() {
+    if !vpl_core::cpu::has_avx2_fma() {
         return false;
     }
     // SAFETY: the CPU has AVX2 and FMA (checked above).

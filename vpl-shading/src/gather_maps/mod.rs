@@ -5,7 +5,7 @@
 //!
 //! Two implementations compute the same lanes with the same operations in
 //! the same order: one with AVX2 intrinsics (one 256-bit register per step,
-//! the map's texels fetched by one `vpgatherdd`-style gather), chosen at
+//! the map's texels fetched by one `vgatherdps`), chosen at
 //! run time where the CPU has AVX2 and FMA, and one over `wide`'s 8-lane
 //! type (two SSE halves) elsewhere. No fused multiply-add is written, so
 //! both give the same bits.

@@ -6,7 +6,7 @@ use vpl_core::{Budget, ParamError, Params, VplSampler};
 use vpl_ir::{InstantRadiosity, IrConfig};
 use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
 use vpl_rr::{LightPaths, RrConfig, RrSampler, SamplerCandidates};
-use vpl_smc::{FluxEstimator, SmcConfig, SmcSampler};
+use vpl_smc::{FluxEstimator, Placement, SmcConfig, SmcSampler};
 use vpl_tcas::{TcasConfig, TcasSampler};
 
 /// A parameter error of sampler `name`.
@@ -66,24 +66,29 @@ fn tcas(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, Sampling
 }
 
 fn smc(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
-    smc_with(cx, p, "smc", FluxEstimator::default())
+    smc_with(cx, p, "smc")
 }
 
-/// SMC with the paper's kNN flux (eq. 5 and 7) unless `flux` says otherwise.
+/// SMC as the paper has it: the kNN flux (eq. 5 and 7) at the VPLs' own
+/// points, unless `flux` or `placement` says otherwise.
 fn smc_knn(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
-    smc_with(cx, p, "smc-knn", FluxEstimator::Knn)
+    smc_with(cx, p, "smc-knn")
 }
 
-fn smc_with(cx: &SamplerContext, p: &Params, name: &str, flux: FluxEstimator) -> Result<Box<dyn VplSampler>, SamplingError> {
+fn smc_with(cx: &SamplerContext, p: &Params, name: &str) -> Result<Box<dyn VplSampler>, SamplingError> {
     cx.needs_vpls(name)?;
     cx.needs_indirect(name)?;
-    let config = smc_settings(&cx.budget, p, flux).map_err(param(name))?;
+    let config = smc_settings(&cx.budget, p, name == "smc-knn").map_err(param(name))?;
     SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
 }
 
-fn smc_settings(budget: &Budget, p: &Params, flux: FluxEstimator) -> Result<SmcConfig, ParamError> {
+/// The toolkit's SMC settings, or the paper's (`paper`: kNN flux at the sites).
+fn smc_settings(budget: &Budget, p: &Params, paper: bool) -> Result<SmcConfig, ParamError> {
     let mut config = SmcConfig::from_params(budget, p)?;
-    config.flux = p.get_or("flux", flux)?;
+    if paper {
+        config.flux = p.get_or("flux", FluxEstimator::Knn)?;
+        config.placement = p.get_or("placement", Placement::Site)?;
+    }
     Ok(config)
 }
 
@@ -91,8 +96,8 @@ fn smc_settings(budget: &Budget, p: &Params, flux: FluxEstimator) -> Result<SmcC
 /// SMC sampler for `budget` and `p`; `None` for any other name.
 pub fn smc_config(name: &str, budget: &Budget, p: &Params) -> Option<Result<SmcConfig, ParamError>> {
     match name {
-        "smc" => Some(smc_settings(budget, p, FluxEstimator::default())),
-        "smc-knn" => Some(smc_settings(budget, p, FluxEstimator::Knn)),
+        "smc" => Some(smc_settings(budget, p, false)),
+        "smc-knn" => Some(smc_settings(budget, p, true)),
         _ => None,
     }
 }

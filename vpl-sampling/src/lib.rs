@@ -63,5 +63,5 @@ pub use vpl_core::{Budget, ParamError, ParamKey, Params, Services, Stats, VplSam
 pub use vpl_ir::{InstantRadiosity, IrConfig, IrStats, PathSampling};
 pub use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
 pub use vpl_rr::{CandidateSource, LightPaths, RrConfig, RrSampler, RrStats, SamplerCandidates};
-pub use vpl_smc::{FluxEstimator, SmcConfig, SmcError, SmcSampler, SmcStats, SmcTimings};
+pub use vpl_smc::{FluxEstimator, Placement, SmcConfig, SmcError, SmcSampler, SmcStats, SmcTimings};
 pub use vpl_tcas::{TcasConfig, TcasSampler};

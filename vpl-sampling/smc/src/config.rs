@@ -1,6 +1,7 @@
 //! Settings of the SMC sampler, with the paper's defaults.
 
 use crate::flux::{AreaProbes, FluxEstimator, flux_param};
+use crate::placement::Placement;
 use vpl_core::{Budget, ParamError, ParamKey, Params};
 use vpl_density::rendering_k;
 
@@ -39,6 +40,8 @@ pub struct SmcConfig {
     pub flux: FluxEstimator,
     /// T: iterations of candidate-ray hits that measure the Voronoi cells.
     pub probe_iterations: usize,
+    /// Where in its Voronoi cell a VPL shines from ([`Placement`]).
+    pub placement: Placement,
 }
 
 impl Default for SmcConfig {
@@ -57,6 +60,7 @@ impl Default for SmcConfig {
             strong_quantile: 0.95,
             flux: FluxEstimator::default(),
             probe_iterations: 16,
+            placement: Placement::default(),
         }
     }
 }
@@ -67,11 +71,17 @@ impl SmcConfig {
         self.knn_k.unwrap_or_else(|| rendering_k(self.vpls))
     }
 
+    /// Whether the sampler measures Voronoi cells with area probes: for the
+    /// flux ([`FluxEstimator::probes`]) or for the placement.
+    pub fn probes(&self) -> bool {
+        self.flux.probes() || self.placement == Placement::Centroid
+    }
+
     /// Bytes the sampler keeps beyond its VPLs: the area probes of the
-    /// Voronoi-cell fluxes, T iterations of I × resample-ratio hits (none
-    /// for the kNN flux).
+    /// Voronoi cells, T iterations of I × resample-ratio hits (none for the
+    /// kNN flux at the sites).
     pub fn probe_memory(&self) -> u64 {
-        if !self.flux.probes() {
+        if !self.probes() {
             return 0;
         }
         (self.vpls as u64)
@@ -137,6 +147,11 @@ impl SmcConfig {
             about: "area per VPL in its flux: voronoi (cells measured by candidate hits), knn (the paper's eq. 7) or knn-calibrated",
         },
         ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
+        ParamKey {
+            key: "placement",
+            default: "site",
+            about: "where a VPL shines from in its Voronoi cell: site (its own point, the paper's) or centroid (the cell's probe nearest its centroid)",
+        },
     ];
 
     /// The settings of `budget` (I and the radiosity paths' bounces,
@@ -166,6 +181,7 @@ impl SmcConfig {
             strong_quantile,
             flux: flux_param(p)?,
             probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
+            placement: p.get_or("placement", d.placement)?,
         })
     }
 }

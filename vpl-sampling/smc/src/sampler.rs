@@ -2,6 +2,7 @@
 
 use crate::config::{SmcConfig, SmcError};
 use crate::flux::{AreaProbes, FluxEstimator, Site};
+use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, resolve};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -123,6 +124,8 @@ pub struct SmcSampler {
     iterations: u64,
     lighting: Option<LightingKey>,
     probes: AreaProbes,
+    /// The point each slot's VPL shone from last ([`Placement::Centroid`]).
+    shown: Vec<Option<Shown>>,
     /// Inside the warm-up: the flux is not looked at, so the cells are not measured.
     warming: bool,
     /// Whether this iteration's hits become area probes (all but the
@@ -185,6 +188,7 @@ impl SmcSampler {
             iterations: 0,
             lighting: None,
             probes: AreaProbes::new(config.probe_iterations),
+            shown: vec![None; config.vpls],
             warming: false,
             collect_probes: true,
             stats: SmcStats::default(),
@@ -228,6 +232,7 @@ impl SmcSampler {
         self.iterations = 0;
         self.lighting = None;
         self.probes.clear();
+        self.shown.iter_mut().for_each(|s| *s = None);
     }
 
     /// The seed of VPL `id`'s radiosity paths.
@@ -381,12 +386,13 @@ impl SmcSampler {
         tm.radiosity_ms += ms(t0);
 
         // The hits become area probes, the candidates among them with their radiance.
-        if c.flux.probes() && self.collect_probes {
+        if c.probes() && self.collect_probes {
             let t0 = Instant::now();
             let sampled: Vec<(usize, Vec3)> = chosen.iter().copied().zip(radiances.iter().copied()).collect();
             let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
+            let shading: Vec<Vec3> = hits.iter().map(|h| h.y.n).collect();
             if let Some(tree) = hit_tree {
-                self.probes.push(&hit_points, &normals, tree, &nearest, &sampled);
+                self.probes.push(&hit_points, &normals, &shading, tree, &nearest, &sampled);
             }
             tm.knn_ms += ms(t0);
         }
@@ -529,7 +535,8 @@ impl SmcSampler {
     /// The output: flux Φ (eq. 5 and the flux convention of vpl-core) as
     /// the configured [`FluxEstimator`] makes it. Until cells have been
     /// measured (and during the warm-up, whose flux nobody looks at) it is
-    /// the paper's L / (n p).
+    /// the paper's L / (n p). Each VPL shines from where the configured
+    /// [`Placement`] puts it (the site until cells have been measured).
     fn write_fluxes(&mut self, scene: &Scene, n: usize, st: &mut SmcStats, tm: &mut SmcTimings) {
         let t0 = Instant::now();
         let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
@@ -540,7 +547,8 @@ impl SmcSampler {
             let p = particle(s);
             flux[s] = p.radiance / (n as f32 * p.density);
         }
-        if self.config.flux.probes() && !self.warming {
+        let mut shown: Vec<Option<Shown>> = vec![None; self.config.vpls];
+        if self.config.probes() && !self.warming {
             let sites: Vec<Site> = slots
                 .iter()
                 .map(|&s| {
@@ -572,20 +580,30 @@ impl SmcSampler {
                     }
                     FluxEstimator::Knn => {}
                 }
+                if self.config.placement == Placement::Centroid {
+                    let centroids: Vec<Vec3> = cells.iter().map(|c| c.centroid).collect();
+                    let nearest = self.probes.nearest_probes(&sites, &centroids);
+                    let mut choices = vec![None; self.config.vpls];
+                    for ((&s, c), near) in slots.iter().zip(&cells).zip(nearest) {
+                        let p = particle(s);
+                        choices[s] = Some(placement::choose(p.id, (p.y.p, p.y.n), self.shown[s], c.centroid, c.area, near));
+                    }
+                    // Moves for placement share M_max with the slots Algorithm 1 replaced.
+                    let budget = self.config.m_max.saturating_sub(st.removed.max(st.added));
+                    shown = placement::settle(choices, &self.shown, budget);
+                }
             }
         }
         tm.knn_ms += ms(t0);
         self.set.begin_frame();
         for (s, f) in flux.into_iter().enumerate() {
-            let v = self.particles[s].map(|p| Vpl {
-                y: p.y.p,
-                n: p.y.n,
-                flux: if f.is_finite() { f } else { Vec3::ZERO },
-                id: p.id,
-                bounce: 0,
+            let v = self.particles[s].map(|p| {
+                let (y, n) = shown[s].map_or((p.y.p, p.y.n), |at| (at.p, at.n));
+                Vpl { y, n, flux: if f.is_finite() { f } else { Vec3::ZERO }, id: p.id, bounce: 0 }
             });
             self.set.set(s, v);
         }
+        self.shown = shown;
         st.stored = n;
         st.intensity_cv = coefficient_of_variation(self.particles.iter().flatten().map(|p| p.intensity()));
     }

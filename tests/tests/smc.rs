@@ -383,7 +383,7 @@ fn selection_does_not_bias_the_vpl_radiosities() {
 ///
 /// Bound: for each placement, the image mean over seeds 0–2 is within 3 %
 /// of path tracing's (the target of the flux; at 96×72 through `vpl render`
-/// the sites give 0.997, 1.019 and 0.999, the centroids 1.000, 0.999 and
+/// the sites give 0.997, 1.019 and 0.999, the centroids 1.000, 1.018 and
 /// 0.996). The path tracer's 512 samples a pixel put its own standard
 /// error under 0.2 %, and the seeds' spread (about 1.5 %) puts the mean's
 /// under 1 %. The paper's estimator (kNN flux at the sites), one seed, must

@@ -45,10 +45,13 @@
 //! Measured (unclamped indirect image over path tracing's, I = 2048, 96×72,
 //! seeds 0–2, `vpl render`): the Munich blocks 1.041 at the sites, 0.994
 //! with this placement; `atrium` 0.999 and 0.996; `office` 1.019 and
-//! 0.999; Dabrovic's Sponza 0.993 and **0.970**. Sponza is why this is not
-//! the default yet: there the cells' own fluxes are about 2–3 % dark (with
-//! the light spread over each cell's probes they give 0.977), which the
-//! sites' placement error happened to offset.
+//! 1.018; `cornell` 0.997 and 1.000; Dabrovic's Sponza 0.993 and
+//! **0.970**. On Sponza the cells' own fluxes are dark: 2.4 % of the
+//! candidates' light lies in probes that none of the four nearest VPLs on
+//! their surface, nor of the four around an edge, sees; they belong to no
+//! cell, and the sites' placement error had offset that. In Table 1
+//! neither placement wins on both |E| and |E′| (the differences lie within
+//! the intervals), so the site stays the default.
 //!
 //! The particle keeps its own point for every decision of Algorithm 1
 //! (densities, intensities, mailboxes); only the VPL handed to the renderer

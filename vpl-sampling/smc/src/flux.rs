@@ -187,6 +187,15 @@ struct Probe {
     owner: Owner,
 }
 
+impl Probe {
+    /// Whether the probe lies on `site`'s own smooth surface (normals
+    /// within 60°).
+    #[inline]
+    fn on_surface_of(&self, site: &Site) -> bool {
+        site.n.dot(self.n) > SAME_SURFACE_COS
+    }
+}
+
 /// A Voronoi cell as the probes measured it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Cell {
@@ -560,7 +569,7 @@ impl AreaProbes {
                     let Some(i) = live.get(q.owner) else { continue };
                     let (c, m, own) = &mut cells[i];
                     c.area += q.area as f64;
-                    if sites[i].n.dot(q.n) > SAME_SURFACE_COS {
+                    if q.on_surface_of(&sites[i]) {
                         *m += q.p.as_dvec3() * q.area as f64;
                         *own += q.area as f64;
                     }
@@ -598,8 +607,9 @@ impl AreaProbes {
 
     /// For each site, the probe of its cell on its own smooth surface
     /// (normals within 60°) nearest `targets[i]` (its position and shading
-    /// normal), `None` for a cell without such probes that stand for area. Ties go to the older iteration and the earlier hit,
-    /// so the answer is the same on any thread count.
+    /// normal), `None` for a cell without such probes that stand for area.
+    /// Ties go to the older iteration and the earlier hit, so the answer is
+    /// the same on any thread count.
     pub fn nearest_probes(&self, sites: &[Site], targets: &[Vec3]) -> Vec<Option<(Vec3, Vec3)>> {
         let live = Live::new(sites);
         let per_batch: Vec<Vec<Option<(f32, Vec3, Vec3)>>> = self
@@ -610,7 +620,7 @@ impl AreaProbes {
                 for q in batch {
                     let Some(i) = live.get(q.owner) else { continue };
                     let Some(&t) = targets.get(i) else { continue };
-                    if q.area <= 0.0 || sites[i].n.dot(q.n) <= SAME_SURFACE_COS {
+                    if q.area <= 0.0 || !q.on_surface_of(&sites[i]) {
                         continue;
                     }
                     let d2 = (q.p - t).length_squared();

@@ -106,9 +106,9 @@ impl std::fmt::Display for Placement {
     }
 }
 
-/// The share of a cell's radius √(|V| / π) by which the centroid may move
-/// away from the point a VPL shines from before the VPL moves to the
-/// probe nearest the centroid.
+/// The share of a cell's radius √(|V| / π) by which a probe must lie
+/// nearer the cell's centroid than the point a VPL shines from before the
+/// VPL moves to it.
 pub const KEEP_WITHIN: f32 = 0.25;
 
 /// The point a VPL shines from: position and normal (on its lit side).

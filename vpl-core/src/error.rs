@@ -78,6 +78,14 @@ pub enum CoreError {
         /// What the parser said.
         reason: String,
     },
+    /// A glTF 2.0 file could not be read or holds what the renderers cannot use.
+    #[error("bad glTF {path}: {reason}")]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the node, mesh, accessor or material.
+        reason: String,
+    },
     /// A scene file (TOML) could not be parsed or is inconsistent.
     #[error("bad scene file {path}: {reason}")]
     SceneFile {

@@ -53,6 +53,8 @@ pub mod emission;
 pub mod error;
 pub mod frame;
 pub mod gbuffer;
+#[cfg(feature = "formats")]
+pub mod gltf_file;
 pub mod halton;
 pub mod image;
 pub mod importons;

@@ -29,13 +29,20 @@ pub struct SceneFile {
     pub sequence: Option<SequenceSpec>,
 }
 
-/// `[geometry]`: exactly one of `obj` and `builtin`.
+/// `[geometry]`: exactly one of `obj`, `gltf` and `builtin`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GeometrySpec {
     /// OBJ path, relative to the TOML file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obj: Option<String>,
+    /// glTF 2.0 path (`.gltf` or `.glb`), relative to the TOML file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gltf: Option<String>,
+    /// The glTF camera to use, by name (default: the file's first
+    /// perspective camera); a `[camera]` table overrides either.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gltf_camera: Option<String>,
     /// Name of a built-in scene.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub builtin: Option<String>,
@@ -214,14 +221,15 @@ impl SceneFile {
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
         let f: SceneFile = toml::from_str(text)
             .map_err(|e| CoreError::SceneFile { path: path.into(), reason: e.message().replace('\n', " ").trim().to_string() })?;
-        match (&f.geometry.obj, &f.geometry.builtin) {
-            (Some(_), Some(_)) | (None, None) => {
-                return Err(CoreError::SceneFile {
-                    path: path.into(),
-                    reason: "[geometry] needs exactly one of `obj` and `builtin`".into(),
-                });
-            }
-            _ => {}
+        let sources = [f.geometry.obj.is_some(), f.geometry.gltf.is_some(), f.geometry.builtin.is_some()];
+        if sources.iter().filter(|&&s| s).count() != 1 {
+            return Err(CoreError::SceneFile {
+                path: path.into(),
+                reason: "[geometry] needs exactly one of `obj`, `gltf` and `builtin`".into(),
+            });
+        }
+        if f.geometry.gltf_camera.is_some() && f.geometry.gltf.is_none() {
+            return Err(CoreError::SceneFile { path: path.into(), reason: "geometry.gltf_camera needs geometry.gltf".into() });
         }
         if f.geometry.up != "y" && f.geometry.up != "z" {
             return Err(CoreError::SceneFile {

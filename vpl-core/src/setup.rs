@@ -30,7 +30,8 @@ pub struct SceneSetup {
 }
 
 impl SceneSetup {
-    /// Loads `spec`: a built-in name, a `.toml` scene file or an `.obj` file.
+    /// Loads `spec`: a built-in name, a `.toml` scene file, an `.obj` file or
+    /// a glTF 2.0 file (`.gltf`, `.glb`).
     pub fn load(spec: &str) -> Result<SceneSetup> {
         let path = Path::new(spec);
         let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -47,18 +48,21 @@ impl SceneSetup {
             }
             #[cfg(not(feature = "formats"))]
             Some("toml") => Err(CoreError::Invalid(format!("{spec}: reading scene files needs vpl-core's `formats` feature"))),
-            Some("obj") => {
-                let file = SceneFile {
-                    geometry: GeometrySpec { obj: Some(spec.to_string()), builtin: None, up: "y".into(), scale: 1.0, two_sided: None },
-                    camera: None,
-                    lights: None,
-                    materials: Vec::new(),
-                    sequence: None,
+            Some(ext @ ("obj" | "gltf" | "glb")) => {
+                let geometry = GeometrySpec {
+                    obj: (ext == "obj").then(|| spec.to_string()),
+                    gltf: (ext != "obj").then(|| spec.to_string()),
+                    gltf_camera: None,
+                    builtin: None,
+                    up: "y".into(),
+                    scale: 1.0,
+                    two_sided: None,
                 };
+                let file = SceneFile { geometry, camera: None, lights: None, materials: Vec::new(), sequence: None };
                 Self::from_file(file, Path::new(""))
             }
             _ if builtin::NAMES.contains(&spec) => Self::builtin(spec),
-            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml or .obj"))),
+            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf or .glb"))),
             _ => Err(CoreError::UnknownBuiltin(spec.to_string())),
         }
     }
@@ -70,17 +74,41 @@ impl SceneSetup {
         Self::from_file(file, Path::new(""))
     }
 
-    /// Builds from a parsed description; OBJ paths are relative to `base`.
+    /// Builds from a parsed description; OBJ and glTF paths are relative to
+    /// `base`.
+    ///
+    /// Everything the description places (the geometry, `[camera]`,
+    /// `[[lights]]`, the sequence's keys, and a glTF file's own camera and
+    /// lights) is in the model's frame: `geometry.up = "z"` turns all of it
+    /// to the toolkit's +Y up, and `geometry.scale` scales all positions.
     pub fn from_file(file: SceneFile, base: &Path) -> Result<SceneSetup> {
         let mut warnings = Vec::new();
-        let (name, mesh, mut materials, defaults, two_sided_default) = if let Some(b) = &file.geometry.builtin {
-            let b = builtin::build(b)?;
-            let d = b.description();
-            (b.name.to_string(), b.mesh, b.materials, Some(d), b.two_sided)
-        } else {
-            let (name, mesh, materials) = obj_geometry(&file.geometry, base, &mut warnings)?;
-            (name, mesh, materials, None, true)
-        };
+        let frame = ModelFrame::of(&file.geometry);
+        let Loaded { name, mesh, mut materials, lights: file_lights, camera: file_camera, defaults, two_sided: two_sided_default } =
+            if let Some(b) = &file.geometry.builtin {
+                let b = builtin::build(b)?;
+                let d = b.description();
+                Loaded {
+                    name: b.name.to_string(),
+                    mesh: b.mesh,
+                    materials: b.materials,
+                    lights: None,
+                    camera: None,
+                    defaults: Some(d),
+                    two_sided: b.two_sided,
+                }
+            } else if file.geometry.gltf.is_some() {
+                gltf_geometry(&file.geometry, base, &mut warnings)?
+            } else {
+                obj_geometry(&file.geometry, base, &mut warnings)?
+            };
+        let mut mesh = mesh;
+        for v in mesh.positions.iter_mut() {
+            *v = frame.point(*v);
+        }
+        for n in mesh.normals.iter_mut() {
+            *n = frame.direction(*n);
+        }
         for m in &file.materials {
             let target = materials
                 .iter_mut()
@@ -88,8 +116,10 @@ impl SceneSetup {
                 .ok_or_else(|| CoreError::Invalid(format!("material override names unknown material '{}'", m.name)))?;
             apply_override(target, m)?;
         }
-        let lights_spec = file.lights.clone().or_else(|| defaults.as_ref().and_then(|d| d.lights.clone())).unwrap_or_default();
-        let lights = lights_spec.iter().map(light_from_spec).collect::<Result<Vec<_>>>()?;
+        // Lights and camera as the model's frame gives them.
+        let lights_spec =
+            file.lights.clone().or(file_lights).or_else(|| defaults.as_ref().and_then(|d| d.lights.clone())).unwrap_or_default();
+        let lights = lights_spec.iter().map(|l| light_from_spec(&frame.light(l))).collect::<Result<Vec<_>>>()?;
         let two_sided = file.geometry.two_sided.unwrap_or(two_sided_default);
         let scene = Scene::new(name, &mesh, materials, lights, two_sided).map_err(|e| match e {
             // Say what loading noticed: a missing material library is the usual reason for a dark OBJ.
@@ -97,15 +127,15 @@ impl SceneSetup {
             e => e,
         })?;
         warnings.extend(scene.warnings.iter().cloned());
-        let camera_spec = file.camera.clone().or_else(|| defaults.as_ref().and_then(|d| d.camera.clone()));
+        let camera_spec = file.camera.clone().or(file_camera).or_else(|| defaults.as_ref().and_then(|d| d.camera.clone()));
         let camera = match &camera_spec {
-            Some(c) => camera_from_spec(c)?,
+            Some(c) => camera_from_spec(&frame.camera(c))?,
             None => framing_camera(&scene)?,
         };
         let seq_spec = file.sequence.clone().or_else(|| defaults.as_ref().and_then(|d| d.sequence.clone()));
-        let sequence = seq_spec.as_ref().map(|s| sequence_from_spec(s, lights_spec.len())).transpose()?;
+        let sequence = seq_spec.as_ref().map(|s| sequence_from_spec(&frame.sequence(s), lights_spec.len())).transpose()?;
         let mut description = file;
-        description.camera = camera_spec.or_else(|| Some(camera_to_spec(&camera)));
+        description.camera = camera_spec.or_else(|| Some(frame.camera_back(&camera_to_spec(&camera))));
         description.lights = Some(lights_spec);
         description.sequence = seq_spec;
         Ok(SceneSetup { scene, camera, sequence, warnings, description })
@@ -307,33 +337,137 @@ fn framing_camera(scene: &Scene) -> Result<Camera> {
     Camera::new(c + Vec3::Z * d, c, Vec3::Y, fov, FovAxis::Smaller, (320, 240))
 }
 
-/// The OBJ geometry of a description: name, mesh (rotated to Y-up and
-/// scaled as `geometry` says) and materials; loading notes go to `warnings`.
+/// What a geometry source gives, in the model's frame.
+struct Loaded {
+    name: String,
+    mesh: crate::mesh::Mesh,
+    materials: Vec<Material>,
+    /// Lights the file itself holds (glTF).
+    lights: Option<Vec<LightSpec>>,
+    /// The camera the file itself holds (glTF).
+    camera: Option<CameraSpec>,
+    /// A built-in's own description.
+    defaults: Option<SceneFile>,
+    two_sided: bool,
+}
+
+/// The map from a description's model frame to the toolkit's world (+Y
+/// up): `up = "z"` turns (x, y, z) into (x, z, −y), then positions scale.
+#[derive(Clone, Copy, Debug)]
+struct ModelFrame {
+    z_up: bool,
+    scale: f32,
+}
+
+impl ModelFrame {
+    fn of(g: &GeometrySpec) -> ModelFrame {
+        ModelFrame { z_up: g.up == "z", scale: g.scale }
+    }
+
+    fn direction(self, v: Vec3) -> Vec3 {
+        if self.z_up { Vec3::new(v.x, v.z, -v.y) } else { v }
+    }
+
+    fn point(self, p: Vec3) -> Vec3 {
+        self.direction(p) * self.scale
+    }
+
+    fn direction_back(self, v: Vec3) -> Vec3 {
+        if self.z_up { Vec3::new(v.x, -v.z, v.y) } else { v }
+    }
+
+    fn point_back(self, p: Vec3) -> Vec3 {
+        self.direction_back(p / self.scale)
+    }
+
+    fn p(self, a: [f32; 3]) -> [f32; 3] {
+        self.point(Vec3::from(a)).into()
+    }
+
+    fn d(self, a: [f32; 3]) -> [f32; 3] {
+        self.direction(Vec3::from(a)).into()
+    }
+
+    fn light(self, l: &LightSpec) -> LightSpec {
+        match l.clone() {
+            LightSpec::Point { position, intensity } => LightSpec::Point { position: self.p(position), intensity },
+            LightSpec::Spot { position, direction, intensity, angle, falloff_start } => {
+                LightSpec::Spot { position: self.p(position), direction: self.d(direction), intensity, angle, falloff_start }
+            }
+            LightSpec::Directional { direction, irradiance } => LightSpec::Directional { direction: self.d(direction), irradiance },
+        }
+    }
+
+    fn camera(self, c: &CameraSpec) -> CameraSpec {
+        let mut c = c.clone();
+        c.origin = self.p(c.origin);
+        c.target = self.p(c.target);
+        c.up = self.d(c.up);
+        c.focus_distance *= self.scale;
+        c.lens_radius *= self.scale;
+        c
+    }
+
+    fn camera_back(self, c: &CameraSpec) -> CameraSpec {
+        let mut c = c.clone();
+        c.origin = self.point_back(Vec3::from(c.origin)).into();
+        c.target = self.point_back(Vec3::from(c.target)).into();
+        c.up = self.direction_back(Vec3::from(c.up)).into();
+        c.focus_distance /= self.scale;
+        c.lens_radius /= self.scale;
+        c
+    }
+
+    fn sequence(self, s: &SequenceSpec) -> SequenceSpec {
+        let mut s = s.clone();
+        for k in s.camera.iter_mut() {
+            k.origin = self.p(k.origin);
+            k.target = self.p(k.target);
+        }
+        for k in s.lights.iter_mut() {
+            k.position = k.position.map(|p| self.p(p));
+            k.direction = k.direction.map(|d| self.d(d));
+        }
+        s
+    }
+}
+
+/// The OBJ geometry of a description, in the model's frame; loading notes
+/// go to `warnings`.
 #[cfg(feature = "formats")]
-fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<(String, crate::mesh::Mesh, Vec<Material>)> {
+fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
     let p = base.join(geometry.obj.as_deref().unwrap_or_default());
     let data = load_obj(&p)?;
     warnings.extend(data.warnings);
-    let mut mesh = data.mesh;
-    let s = geometry.scale;
-    let z_up = geometry.up == "z";
-    for v in mesh.positions.iter_mut() {
-        *v = if z_up { Vec3::new(v.x, v.z, -v.y) } else { *v } * s;
-    }
-    for n in mesh.normals.iter_mut() {
-        if z_up {
-            *n = Vec3::new(n.x, n.z, -n.y);
-        }
-    }
     let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-    Ok((name, mesh, data.materials))
+    Ok(Loaded { name, mesh: data.mesh, materials: data.materials, lights: None, camera: None, defaults: None, two_sided: true })
+}
+
+/// The glTF scene of a description, in the model's frame (glTF's own, +Y
+/// up, unless the description says otherwise), with the file's lights and
+/// camera.
+#[cfg(feature = "formats")]
+fn gltf_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
+    let p = base.join(geometry.gltf.as_deref().unwrap_or_default());
+    let data = crate::gltf_file::load_gltf(&p, geometry.gltf_camera.as_deref())?;
+    warnings.extend(data.warnings);
+    let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+    let lights = (!data.lights.is_empty()).then_some(data.lights);
+    Ok(Loaded { name, mesh: data.mesh, materials: data.materials, lights, camera: data.camera, defaults: None, two_sided: true })
 }
 
 /// Without the `formats` feature there is no OBJ reader.
 #[cfg(not(feature = "formats"))]
-fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<(String, crate::mesh::Mesh, Vec<Material>)> {
+fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
     let obj = geometry.obj.as_deref().unwrap_or_default();
     Err(CoreError::Invalid(format!("{obj}: reading OBJ files needs vpl-core's `formats` feature")))
+}
+
+/// Without the `formats` feature there is no glTF reader.
+#[cfg(not(feature = "formats"))]
+fn gltf_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
+    let g = geometry.gltf.as_deref().unwrap_or_default();
+    Err(CoreError::Invalid(format!("{g}: reading glTF files needs vpl-core's `formats` feature")))
 }
 
 impl builtin::Builtin {
@@ -342,6 +476,8 @@ impl builtin::Builtin {
         SceneFile {
             geometry: GeometrySpec {
                 obj: None,
+                gltf: None,
+                gltf_camera: None,
                 builtin: Some(self.name.to_string()),
                 up: "y".into(),
                 scale: 1.0,
@@ -396,5 +532,82 @@ mod tests {
         let bad = "[geometry]\nbuiltin = \"courtyard\"\n[sequence]\nduration = 2.0\nlights = [ { light = 3, t = 0.0 } ]\n";
         let f = SceneFile::parse(bad, Path::new("s.toml")).unwrap();
         assert!(SceneSetup::from_file(f, Path::new("")).unwrap_err().to_string().contains("light 3"));
+    }
+}
+
+#[cfg(all(test, feature = "formats"))]
+mod frame_tests {
+    use super::*;
+
+    /// A floor and a wall in a Z-up model, written as OBJ.
+    const Z_UP_OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv -1 1 2\nv 1 1 2\nf 1 2 3\nf 1 3 4\nf 4 3 6\nf 4 6 5\n";
+
+    fn twin_obj(text: &str) -> String {
+        // The same model turned to Y up: (x, y, z) -> (x, z, -y).
+        text.lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f32> = rest.split_whitespace().map(|t| t.parse().unwrap()).collect();
+                    format!("v {} {} {}", v[0], v[2], -v[1])
+                }
+                None => l.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    #[test]
+    fn a_z_up_scene_and_its_y_up_twin_are_the_same_scene_camera_lights_and_keys() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("z.obj"), Z_UP_OBJ).unwrap();
+        std::fs::write(dir.path().join("y.obj"), twin_obj(Z_UP_OBJ)).unwrap();
+        let z = "[geometry]\nobj = \"z.obj\"\nup = \"z\"\nscale = 2.0\n\
+                 [camera]\norigin = [0.0, -5.0, 1.0]\ntarget = [0.0, 0.0, 0.5]\nup = [0.0, 0.0, 1.0]\nfov = 50.0\n\
+                 [[lights]]\ntype = \"point\"\nposition = [0.0, 0.0, 1.5]\nintensity = [1.0, 1.0, 1.0]\n\
+                 [[lights]]\ntype = \"directional\"\ndirection = [0.0, 1.0, -1.0]\nirradiance = [1.0, 1.0, 1.0]\n\
+                 [sequence]\nduration = 1.0\ncamera = [ { t = 1.0, origin = [1.0, -5.0, 1.0], target = [0.0, 0.0, 0.5] } ]\n\
+                 lights = [ { light = 0, t = 1.0, position = [0.5, 0.0, 1.5] } ]\n";
+        let y = "[geometry]\nobj = \"y.obj\"\nscale = 2.0\n\
+                 [camera]\norigin = [0.0, 1.0, 5.0]\ntarget = [0.0, 0.5, 0.0]\nup = [0.0, 1.0, 0.0]\nfov = 50.0\n\
+                 [[lights]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [1.0, 1.0, 1.0]\n\
+                 [[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, -1.0]\nirradiance = [1.0, 1.0, 1.0]\n\
+                 [sequence]\nduration = 1.0\ncamera = [ { t = 1.0, origin = [1.0, 1.0, 5.0], target = [0.0, 0.5, 0.0] } ]\n\
+                 lights = [ { light = 0, t = 1.0, position = [0.5, 1.5, 0.0] } ]\n";
+        let load = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            SceneSetup::load(p.to_str().unwrap()).unwrap()
+        };
+        let (a, b) = (load("z.toml", z), load("y.toml", y));
+        for frame in [0, 15, 30] {
+            let ((sa, ca), (sb, cb)) = (a.frame(frame).unwrap(), b.frame(frame).unwrap());
+            assert_eq!(sa.geometry.bounds, sb.geometry.bounds);
+            assert_eq!(sa.geometry.triangles.len(), sb.geometry.triangles.len());
+            for (ta, tb) in sa.geometry.triangles.iter().zip(&sb.geometry.triangles) {
+                assert!((ta.ng - tb.ng).length() < 1e-6, "{:?} {:?}", ta.ng, tb.ng);
+            }
+            assert!((ca.origin - cb.origin).length() < 1e-5 && (ca.target - cb.target).length() < 1e-5, "{ca:?} {cb:?}");
+            assert!((ca.up - cb.up).length() < 1e-6);
+            for (la, lb) in sa.lights.iter().zip(&sb.lights) {
+                match (la, lb) {
+                    (Light::Point { position: pa, .. }, Light::Point { position: pb, .. }) => assert!((*pa - *pb).length() < 1e-5),
+                    (Light::Directional { direction: da, .. }, Light::Directional { direction: db, .. }) => {
+                        assert!((*da - *db).length() < 1e-6)
+                    }
+                    (la, lb) => panic!("{la:?} {lb:?}"),
+                }
+            }
+        }
+        // The description keeps the model's frame: exported and loaded again, the same scene.
+        let again = SceneFile::parse(&a.to_toml(), Path::new("again.toml")).unwrap();
+        let c = SceneSetup::from_file(again, dir.path()).unwrap();
+        assert_eq!(c.camera, a.camera);
+        // Without a [camera] the framing camera (found in the world) goes back to the model's frame.
+        let bare = load(
+            "bare.toml",
+            "[geometry]\nobj = \"z.obj\"\nup = \"z\"\nscale = 2.0\n[[lights]]\ntype = \"point\"\nposition = [0.0, 0.0, 1.5]\nintensity = [1.0, 1.0, 1.0]\n",
+        );
+        let again = SceneSetup::from_file(SceneFile::parse(&bare.to_toml(), Path::new("b.toml")).unwrap(), dir.path()).unwrap();
+        assert!((again.camera.origin - bare.camera.origin).length() < 1e-4, "{:?} {:?}", again.camera.origin, bare.camera.origin);
     }
 }

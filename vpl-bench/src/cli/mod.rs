@@ -99,7 +99,7 @@ enum ModeArg {
 /// What to render: scene, frame, path tracer settings, threads.
 #[derive(clap::Args)]
 struct SceneArgs {
-    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file or an .obj file.
+    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file, an .obj file or a glTF 2.0 file (.gltf, .glb).
     #[arg(long)]
     scene: String,
     /// Frame of the scene's sequence.

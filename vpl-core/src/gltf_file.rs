@@ -53,7 +53,7 @@ use gltf::mesh::Mode;
 use std::path::{Path, PathBuf};
 
 /// A glTF scene as the toolkit reads it.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct GltfData {
     /// Triangles in world space; their materials index `materials`.
     pub mesh: Mesh,
@@ -93,7 +93,7 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
     }
     let base = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
     let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(|e| err(format!("buffers: {e}")))?;
-    let mut reader = Reader { buffers: &buffers, images: None, base, path: path.into(), data: GltfData::empty() };
+    let mut reader = Reader { buffers: &buffers, images: None, base, path: path.into(), data: GltfData::default() };
     let mut state = Walk { default_material: None, cameras: Vec::new() };
     for m in document.materials() {
         reader.material(&document, &m)?;
@@ -122,12 +122,6 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
         None => state.cameras.first().map(|(_, c)| c.clone()),
     };
     Ok(reader.data)
-}
-
-impl GltfData {
-    fn empty() -> GltfData {
-        GltfData { mesh: Mesh::default(), materials: Vec::new(), lights: Vec::new(), camera: None, warnings: Vec::new() }
-    }
 }
 
 struct Reader<'a> {
@@ -301,7 +295,6 @@ impl Reader<'_> {
         let index = m.index().unwrap_or(self.data.materials.len());
         let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material{index}"));
         let pbr = m.pbr_metallic_roughness();
-        let factor = Vec4Like(pbr.base_color_factor());
         let (cutoff, blend) = match m.alpha_mode() {
             gltf::material::AlphaMode::Mask => (Some(m.alpha_cutoff().unwrap_or(0.5)), false),
             gltf::material::AlphaMode::Blend => (None, true),
@@ -311,7 +304,8 @@ impl Reader<'_> {
             Some(info) => self.texture_average(doc, &info.texture(), cutoff, blend, &name)?,
             None => Vec3::ONE,
         };
-        let base = factor.rgb() * tex_avg;
+        let [r, g, b, _] = pbr.base_color_factor();
+        let base = Vec3::new(r, g, b).max(Vec3::ZERO) * tex_avg;
         let emissive_avg = match m.emissive_texture() {
             Some(info) => self.texture_average(doc, &info.texture(), None, false, &name)?,
             None => Vec3::ONE,
@@ -324,7 +318,7 @@ impl Reader<'_> {
         let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0);
-        let ior = m.ior().filter(|i| i.is_finite() && *i >= 1.0).unwrap_or(1.5);
+        let ior = m.ior().filter(|i| i.is_finite() && *i > 1.0).unwrap_or(1.5);
         let kappa = kappa_from_roughness(roughness);
         // A rough opaque surface is Lambertian with its base colour: the
         // layered model draws a rough (κ < 0.2) reflection layer as a
@@ -334,13 +328,7 @@ impl Reader<'_> {
         let mut out = Material::diffuse(name, if rough_opaque { base } else { base * (1.0 - metallic) });
         out.emission = emission;
         if !rough_opaque {
-            out.layered = Some(Layered {
-                kappa,
-                specular: Vec3::ONE * (1.0 - metallic) + base * metallic,
-                transmission,
-                ior: if ior > 1.0 { ior } else { 1.5 },
-                abbe: 0.0,
-            });
+            out.layered = Some(Layered { kappa, specular: Vec3::ONE * (1.0 - metallic) + base * metallic, transmission, ior, abbe: 0.0 });
         }
         self.data.materials.push(out);
         Ok(())
@@ -432,15 +420,6 @@ fn check_bounds(a: &gltf::Accessor, positions: &[Vec3]) -> std::result::Result<(
         ));
     }
     Ok(())
-}
-
-/// An RGBA factor.
-struct Vec4Like([f32; 4]);
-
-impl Vec4Like {
-    fn rgb(&self) -> Vec3 {
-        Vec3::new(self.0[0], self.0[1], self.0[2]).max(Vec3::ZERO)
-    }
 }
 
 /// κ for glTF's roughness r: α = r² (GGX), the Blinn–Phong exponent with

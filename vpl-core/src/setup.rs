@@ -84,7 +84,7 @@ impl SceneSetup {
     pub fn from_file(file: SceneFile, base: &Path) -> Result<SceneSetup> {
         let mut warnings = Vec::new();
         let frame = ModelFrame::of(&file.geometry);
-        let Loaded { name, mesh, mut materials, lights: file_lights, camera: file_camera, defaults, two_sided: two_sided_default } =
+        let Loaded { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, defaults, two_sided: two_sided_default } =
             if let Some(b) = &file.geometry.builtin {
                 let b = builtin::build(b)?;
                 let d = b.description();
@@ -102,7 +102,6 @@ impl SceneSetup {
             } else {
                 obj_geometry(&file.geometry, base, &mut warnings)?
             };
-        let mut mesh = mesh;
         for v in mesh.positions.iter_mut() {
             *v = frame.point(*v);
         }
@@ -432,6 +431,12 @@ impl ModelFrame {
     }
 }
 
+/// A scene's name from its model file: the file's stem.
+#[cfg(feature = "formats")]
+fn model_name(p: &Path) -> String {
+    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
+}
+
 /// The OBJ geometry of a description, in the model's frame; loading notes
 /// go to `warnings`.
 #[cfg(feature = "formats")]
@@ -439,8 +444,15 @@ fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>
     let p = base.join(geometry.obj.as_deref().unwrap_or_default());
     let data = load_obj(&p)?;
     warnings.extend(data.warnings);
-    let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-    Ok(Loaded { name, mesh: data.mesh, materials: data.materials, lights: None, camera: None, defaults: None, two_sided: true })
+    Ok(Loaded {
+        name: model_name(&p),
+        mesh: data.mesh,
+        materials: data.materials,
+        lights: None,
+        camera: None,
+        defaults: None,
+        two_sided: true,
+    })
 }
 
 /// The glTF scene of a description, in the model's frame (glTF's own, +Y
@@ -451,9 +463,16 @@ fn gltf_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String
     let p = base.join(geometry.gltf.as_deref().unwrap_or_default());
     let data = crate::gltf_file::load_gltf(&p, geometry.gltf_camera.as_deref())?;
     warnings.extend(data.warnings);
-    let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
     let lights = (!data.lights.is_empty()).then_some(data.lights);
-    Ok(Loaded { name, mesh: data.mesh, materials: data.materials, lights, camera: data.camera, defaults: None, two_sided: true })
+    Ok(Loaded {
+        name: model_name(&p),
+        mesh: data.mesh,
+        materials: data.materials,
+        lights,
+        camera: data.camera,
+        defaults: None,
+        two_sided: true,
+    })
 }
 
 /// Without the `formats` feature there is no OBJ reader.

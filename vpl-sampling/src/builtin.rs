@@ -66,19 +66,19 @@ fn tcas(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, Sampling
 }
 
 fn smc(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
-    smc_with(cx, p, "smc")
+    smc_with(cx, p, "smc", false)
 }
 
 /// SMC as the paper has it: the kNN flux (eq. 5 and 7) at the VPLs' own
 /// points, unless `flux` or `placement` says otherwise.
 fn smc_knn(cx: &SamplerContext, p: &Params) -> Result<Box<dyn VplSampler>, SamplingError> {
-    smc_with(cx, p, "smc-knn")
+    smc_with(cx, p, "smc-knn", true)
 }
 
-fn smc_with(cx: &SamplerContext, p: &Params, name: &str) -> Result<Box<dyn VplSampler>, SamplingError> {
+fn smc_with(cx: &SamplerContext, p: &Params, name: &str, paper: bool) -> Result<Box<dyn VplSampler>, SamplingError> {
     cx.needs_vpls(name)?;
     cx.needs_indirect(name)?;
-    let config = smc_settings(&cx.budget, p, name == "smc-knn").map_err(param(name))?;
+    let config = smc_settings(&cx.budget, p, paper).map_err(param(name))?;
     SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
 }
 

@@ -32,11 +32,18 @@ pub enum Target {
     Toml,
     /// A mutated EXR, read as a reference image.
     Exr,
+    /// A mutated Mitsuba XML scene (Mitsuba's Cornell box as analytic
+    /// shapes, and a scene with includes, parameters, spheres, a PLY mesh,
+    /// layered BSDFs and point, spot and sun emitters), rendered.
+    Mitsuba,
+    /// A mutated PLY mesh (binary and ASCII) beside the Mitsuba scene that
+    /// uses it, rendered.
+    Ply,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 4] = [Target::Obj, Target::Mtl, Target::Toml, Target::Exr];
+    pub const ALL: [Target; 6] = [Target::Obj, Target::Mtl, Target::Toml, Target::Exr, Target::Mitsuba, Target::Ply];
 
     /// Its name (the folder of its regressions).
     pub fn name(self) -> &'static str {
@@ -45,6 +52,8 @@ impl Target {
             Target::Mtl => "mtl",
             Target::Toml => "toml",
             Target::Exr => "exr",
+            Target::Mitsuba => "mitsuba",
+            Target::Ply => "ply",
         }
     }
 
@@ -76,6 +85,70 @@ fn data(rel: &str) -> Vec<u8> {
     std::fs::read(crate::data_dir().join(rel)).unwrap_or_else(|e| panic!("fuzz seed {rel}: {e}"))
 }
 
+/// A small PLY tetrahedron, binary little-endian or ASCII.
+fn ply_tetrahedron(binary: bool) -> Vec<u8> {
+    let v = [[0.0f32, -1.0, 0.0], [0.5, -1.0, 0.0], [0.0, -1.0, 0.5], [0.1, -0.5, 0.1]];
+    let f = [[0u32, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+    let fmt = if binary { "binary_little_endian" } else { "ascii" };
+    let mut b = format!(
+        "ply\nformat {fmt} 1.0\ncomment a tetrahedron\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    for p in v {
+        if binary {
+            p.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+        } else {
+            b.extend(format!("{} {} {}\n", p[0], p[1], p[2]).bytes());
+        }
+    }
+    for t in f {
+        if binary {
+            b.push(3);
+            t.iter().for_each(|i| b.extend_from_slice(&(*i as i32).to_le_bytes()));
+        } else {
+            b.extend(format!("3 {} {} {}\n", t[0], t[1], t[2]).bytes());
+        }
+    }
+    b
+}
+
+/// A Mitsuba scene that uses most of what the reader supports.
+const MITSUBA_SCENE: &str = r#"<scene version="3.0.0">
+    <default name="res" value="16"/>
+    <default name="radius" value="0.3"/>
+    <include filename="bsdfs.xml"/>
+    <sensor type="thinlens">
+        <float name="fov" value="40"/>
+        <string name="fov_axis" value="diagonal"/>
+        <float name="aperture_radius" value="0.01"/>
+        <float name="focus_distance" value="3"/>
+        <transform name="to_world"><scale x="-1"/><scale x="-1"/><lookat origin="0, 0, 3.5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$res"/><integer name="height" value="$res"/></film>
+    </sensor>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><translate y="-1"/></transform><ref id="white"/></shape>
+    <shape type="cube"><transform name="to_world"><matrix value="0.3 0 0 -0.4  0 0.3 0 -0.7  0 0 0.3 0  0 0 0 1"/></transform><ref id="plastic"/></shape>
+    <shape type="sphere"><point name="center" x="0.4" y="-0.6" z="0.2"/><float name="radius" value="$radius"/><ref id="metal"/></shape>
+    <shape type="disk"><transform name="to_world"><rotate x="1" angle="90"/><scale value="0.3"/><translate y="0.99"/></transform>
+        <ref id="white"/><ref id="lamp"/></shape>
+    <shape type="ply"><string name="filename" value="m.ply"/><boolean name="flip_normals" value="false"/><bsdf type="dielectric"/></shape>
+    <emitter type="area" id="lamp"><spectrum name="radiance" value="400:2, 500:8, 600:9, 700:9"/></emitter>
+    <emitter type="point"><point name="position" x="0" y="0.5" z="0.5"/><rgb name="intensity" value="0.5"/></emitter>
+    <emitter type="spot"><transform name="to_world"><lookat origin="0, 0.9, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
+        <rgb name="intensity" value="2"/><float name="cutoff_angle" value="30"/></emitter>
+    <emitter type="directional"><vector name="direction" x="0.2" y="-1" z="0.1"/><rgb name="irradiance" value="0.3"/></emitter>
+</scene>
+"#;
+
+/// The BSDFs [`MITSUBA_SCENE`] includes.
+const MITSUBA_BSDFS: &str = r#"<scene version="3.0.0">
+    <bsdf type="twosided" id="white"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.7, 0.6"/></bsdf></bsdf>
+    <bsdf type="roughplastic" id="plastic"><rgb name="diffuse_reflectance" value="0.2 0.3 0.6"/><float name="alpha" value="0.05"/>
+        <string name="int_ior" value="bk7"/></bsdf>
+    <bsdf type="roughconductor" id="metal"><string name="material" value="Au"/><float name="alpha" value="0.02"/></bsdf>
+</scene>
+"#;
+
 /// The seeds of `target`.
 pub fn seeds(target: Target) -> Vec<Seed> {
     let cbox = ("cbox.obj".to_string(), data("cornell-box/cbox.obj"));
@@ -106,6 +179,20 @@ pub fn seeds(target: Target) -> Vec<Seed> {
             let reference = Image::read_exr(crate::data_dir().join("cornell-box/reference_indirect.exr")).expect("reference EXR");
             let reference = vpl_render::metrics::downsample(&reference, 16).expect("256 is a multiple of 16");
             [small, reference].iter().map(|i| Seed { files: vec![("r.exr".into(), i.encode_exr().expect("encode"))] }).collect()
+        }
+        Target::Mitsuba => {
+            let scene = ("s.xml".to_string(), MITSUBA_SCENE.as_bytes().to_vec());
+            let bsdfs = ("bsdfs.xml".to_string(), MITSUBA_BSDFS.as_bytes().to_vec());
+            let ply = ("m.ply".to_string(), ply_tetrahedron(true));
+            vec![Seed { files: vec![("s.xml".into(), data("cornell-box/cornell.xml"))] }, Seed { files: vec![scene, bsdfs, ply] }]
+        }
+        Target::Ply => {
+            let scene = ("s.xml".to_string(), MITSUBA_SCENE.as_bytes().to_vec());
+            let bsdfs = ("bsdfs.xml".to_string(), MITSUBA_BSDFS.as_bytes().to_vec());
+            [true, false]
+                .iter()
+                .map(|b| Seed { files: vec![("m.ply".into(), ply_tetrahedron(*b)), scene.clone(), bsdfs.clone()] })
+                .collect()
         }
     }
 }
@@ -228,6 +315,35 @@ fn lines(target: Target) -> &'static [&'static str] {
             "[[materials]]\nname = \"light\"\nemission = [1e12, 1e12, 1e12]",
             "[[materials]]\nname = \"floor\"\nior = 0\ntransmission = 2",
         ],
+        Target::Mitsuba => &[
+            "<include filename=\"s.xml\"/>",
+            "<include filename=\"/dev/zero\"/>",
+            "<include filename=\"m.ply\"/>",
+            "<default name=\"res\" value=\"$res\"/>",
+            "<default name=\"res\" value=\"100000\"/>",
+            "<shape type=\"sphere\"><float name=\"radius\" value=\"1e38\"/></shape>",
+            "<shape type=\"sphere\"><float name=\"radius\" value=\"0\"/><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>",
+            "<shape type=\"obj\"><string name=\"filename\" value=\"/dev/zero\"/></shape>",
+            "<shape type=\"ply\"><string name=\"filename\" value=\"s.xml\"/></shape>",
+            "<shape type=\"cube\"><ref id=\"nope\"/></shape>",
+            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"0\"/></transform></shape>",
+            "<shape type=\"cube\"><transform name=\"to_world\"><matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 0\"/></transform></shape>",
+            "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"3e38\"/></emitter></shape>",
+            "<shape type=\"rectangle\"><emitter type=\"area\"><spectrum name=\"radiance\" value=\"500:1, 400:1\"/></emitter></shape>",
+            "<bsdf type=\"twosided\" id=\"loop\"><ref id=\"loop\"/></bsdf>",
+            "<bsdf type=\"dielectric\" id=\"white\"><float name=\"int_ior\" value=\"0\"/></bsdf>",
+            "<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"-1\"/><rgb name=\"k\" value=\"nan\"/></bsdf>",
+            "<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"s.xml\"/></texture>",
+            "<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"0\"/></emitter>",
+            "<emitter type=\"directional\"/>",
+            "<emitter type=\"point\"><rgb name=\"intensity\" value=\"1e38\"/></emitter>",
+            "<sensor type=\"perspective\"><float name=\"fov\" value=\"180\"/></sensor>",
+            "<sensor type=\"perspective\"><string name=\"focal_length\" value=\"0mm\"/></sensor>",
+            "<!-- a comment -->",
+            "<![CDATA[x]]>",
+            "</scene>",
+        ],
+        Target::Ply => &["element face 99999999", "property list uchar uint vertex_indices", "format binary_big_endian 1.0", "end_header"],
         Target::Exr => &[],
     }
 }
@@ -439,7 +555,7 @@ fn execute(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) 
         }
     }
     let scene = dir.join(match target {
-        Target::Mtl => &seed.files[1].0,
+        Target::Mtl | Target::Ply => &seed.files[1].0,
         _ => &seed.files[0].0,
     });
     let out = dir.join("out.exr");

@@ -50,3 +50,58 @@ pub fn mitsuba_indirect_64() -> Image {
     let full = Image::read_exr(data_dir().join("cornell-box/reference_indirect.exr")).expect("the Mitsuba indirect reference");
     vpl_render::metrics::downsample(&full, 4).expect("256 is a multiple of 4")
 }
+
+/// Image means of one scene by the path tracer and by the VPL renderer,
+/// each with its standard error (see [`vpl_against_path_tracer`]).
+#[derive(Clone, Copy, Debug)]
+pub struct MeanComparison {
+    /// Path tracer's mean luminance and its standard error.
+    pub path: (f64, f64),
+    /// VPL renderer's mean luminance over the seeds and its standard error.
+    pub vpl: (f64, f64),
+}
+
+impl MeanComparison {
+    /// (VPL − path) over the combined standard error, plus `rounding` of
+    /// the path tracer's mean (for scenes where both are nearly exact).
+    pub fn z(&self, rounding: f64) -> f64 {
+        let (m_pt, se_pt) = self.path;
+        let (m, se) = self.vpl;
+        (m - m_pt) / ((se * se + se_pt * se_pt).sqrt() + rounding * m_pt)
+    }
+}
+
+/// The image mean of `scene` through `camera` by the path tracer (depth 5,
+/// full light, `paths` paths through each pixel centre, the point the
+/// G-buffer shades) and by the VPL renderer (IR, an unbiased sampler, with
+/// `vpls` VPLs, ray-traced, exhaustive, unclamped) over `seeds` seeds. The
+/// path tracer's error is the luminance of the per-pixel channel errors
+/// (pixels independent; this bounds the luminance's error, so it is
+/// conservative); the VPL renderer's is the spread over seeds.
+pub fn vpl_against_path_tracer(scene: &Scene, camera: &vpl_core::Camera, vpls: usize, seeds: u64, paths: u32) -> MeanComparison {
+    use vpl_core::image::luminance;
+    let (w, h) = camera.resolution;
+    let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
+    let pt = vpl_pathtrace::PathTracer::new(5, vpl_core::Mode::Full);
+    let tracked = vpl_pathtrace::track_with(scene, camera, &pt, &pixels, paths, 3, 0, vpl_pathtrace::Footprint::Centre);
+    let n = tracked.len() as f64;
+    let m_pt = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / n;
+    let se_pt = tracked.iter().map(|t| (luminance(t.stderr) as f64).powi(2)).sum::<f64>().sqrt() / n;
+    let means: Vec<f64> = (0..seeds)
+        .map(|seed| {
+            let mut r = vpl_render::Renderer::builder(scene)
+                .sampler("ir")
+                .vpls(vpls)
+                .seed(seed)
+                .visibility(vpl_render::VisibilitySpec::RayTraced)
+                .shader(vpl_render::ShadingSpec::Exhaustive)
+                .mode(vpl_core::Mode::Full)
+                .clamp(vpl_render::Clamp::Off)
+                .build()
+                .expect("an IR renderer");
+            let out = r.render(scene, camera, 0, 0.0).expect("a VPL render");
+            out.image.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / out.image.data.len() as f64
+        })
+        .collect();
+    MeanComparison { path: (m_pt, se_pt), vpl: mean_se(&means) }
+}

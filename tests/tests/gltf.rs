@@ -3,24 +3,11 @@
 //! Fixed seeds; the bound says why.
 
 use std::path::{Path, PathBuf};
-use vpl_core::image::luminance;
-use vpl_core::{Image, SceneSetup};
-use vpl_pathtrace::{Footprint, Mode, PathTracer, track_with};
-use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
-use vpl_tests::mean_se;
+use vpl_core::SceneSetup;
+use vpl_tests::vpl_against_path_tracer;
 
 fn gltf_data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-core/tests/data/gltf").join(p)
-}
-
-/// Mean luminance of an image and, from per-pixel standard errors, its
-/// standard error (pixels independent; the luminance of the channels'
-/// errors bounds the luminance's, so the error is conservative).
-fn mean_and_se(img: &Image, se: &Image) -> (f64, f64) {
-    let n = img.data.len() as f64;
-    let m = img.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / n;
-    let v = se.data.iter().map(|&c| (luminance(c) as f64).powi(2)).sum::<f64>();
-    (m, v.sqrt() / n)
 }
 
 /// `Sundial.glb` (its sun, its camera, at 48×36, its materials' albedo) and `Box.gltf` under a
@@ -59,35 +46,9 @@ fn gltf_scenes_render_with_their_light_as_the_path_tracer_does() {
         assert!(!scene.lights.is_empty(), "{name}");
         let camera = setup.camera.with_resolution((48, 36)).unwrap();
         // Through each pixel's centre, the point the G-buffer shades.
-        let (w, h) = camera.resolution;
-        let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
-        let tracked = track_with(scene, &camera, &PathTracer::new(5, Mode::Full), &pixels, 256, 3, 0, Footprint::Centre);
-        let (mut img, mut err) = (Image::new(w, h), Image::new(w, h));
-        for t in tracked {
-            img.set(t.pixel.0, t.pixel.1, t.mean);
-            err.set(t.pixel.0, t.pixel.1, t.stderr);
-        }
-        let (m_pt, se_pt) = mean_and_se(&img, &err);
-        let means: Vec<f64> = (0..8)
-            .map(|seed| {
-                let mut r = Renderer::builder(scene)
-                    .sampler("ir")
-                    .vpls(1024)
-                    .seed(seed)
-                    .visibility(VisibilitySpec::RayTraced)
-                    .shader(ShadingSpec::Exhaustive)
-                    .mode(vpl_core::Mode::Full)
-                    .clamp(Clamp::Off)
-                    .build()
-                    .unwrap();
-                let out = r.render(scene, &camera, 0, 0.0).unwrap();
-                out.image.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / out.image.data.len() as f64
-            })
-            .collect();
-        let (m, se) = mean_se(&means);
-        // A lone convex box has no indirect light: both images are direct
-        // light only, equal up to rounding (1e-5 relative).
-        let z = (m - m_pt) / ((se * se + se_pt * se_pt).sqrt() + 1e-5 * m_pt);
+        let c = vpl_against_path_tracer(scene, &camera, 1024, 8, 256);
+        let z = c.z(1e-5);
+        let ((m_pt, se_pt), (m, se)) = (c.path, c.vpl);
         eprintln!("{name}: path tracer {m_pt:.5} ± {se_pt:.5}, VPL {m:.5} ± {se:.5}, z = {z:.2}");
         assert!(m_pt > 1e-3, "{name}: the scene is dark ({m_pt})");
         assert!(z.abs() <= 4.0, "{name}: VPL {m} vs path tracer {m_pt}, z = {z:.2}");

@@ -86,6 +86,25 @@ pub enum CoreError {
         /// What is wrong, naming the node, mesh, accessor or material.
         reason: String,
     },
+    /// A Mitsuba XML scene could not be read or holds what the toolkit does
+    /// not support.
+    #[error("{path}:{line}: {reason}")]
+    Mitsuba {
+        /// The file (the scene or one it includes).
+        path: PathBuf,
+        /// 1-based line of the element (0 where the whole file is meant).
+        line: usize,
+        /// What is wrong, naming the element.
+        reason: String,
+    },
+    /// A PLY mesh could not be parsed.
+    #[error("bad PLY {path}: {reason}")]
+    Ply {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A scene file (TOML) could not be parsed or is inconsistent.
     #[error("bad scene file {path}: {reason}")]
     SceneFile {

@@ -431,11 +431,6 @@ pub fn kappa_from_roughness(r: f32) -> f32 {
     ((n - 1.0) / 1024.0).clamp(0.0, 1.0)
 }
 
-/// The glTF sRGB transfer function, decoded.
-fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-}
-
 /// The mean linear RGB of an image's texels (8- and 16-bit channels are
 /// sRGB, float channels linear); with `cutoff`, texels whose alpha is
 /// under it are left out; with `blend`, each texel counts by its alpha.
@@ -456,7 +451,7 @@ pub fn average_colour(img: &gltf::image::Data, cutoff: Option<f32>, blend: bool)
     };
     let texel = channels * bytes;
     // A lookup table for 8-bit sRGB.
-    let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
+    let lut: Vec<f32> = (0..256).map(|v| crate::image::srgb_to_linear(v as f32 / 255.0)).collect();
     let read = |t: &[u8], c: usize| -> f32 {
         match bytes {
             1 => t[c] as f32 / 255.0,
@@ -467,7 +462,7 @@ pub fn average_colour(img: &gltf::image::Data, cutoff: Option<f32>, blend: bool)
     let linear = |t: &[u8], c: usize| -> f32 {
         match bytes {
             1 => lut[t[c] as usize],
-            2 => srgb_to_linear(read(t, c)),
+            2 => crate::image::srgb_to_linear(read(t, c)),
             _ => read(t, c),
         }
     };

@@ -175,6 +175,13 @@ pub fn linear_to_srgb(c: Vec3) -> Vec3 {
     Vec3::new(f(c.x), f(c.y), f(c.z))
 }
 
+/// The sRGB transfer function decoded (IEC 61966-2-1): an encoded channel
+/// value in [0, 1] to linear light.
+#[inline]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
 /// The path of the PNG preview written beside `path` (same stem, `.png`).
 pub fn preview_path(path: &Path) -> PathBuf {
     path.with_extension("png")

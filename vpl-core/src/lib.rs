@@ -62,12 +62,16 @@ pub mod input;
 pub mod light;
 pub mod material;
 pub mod mesh;
+#[cfg(feature = "formats")]
+pub mod mitsuba;
 pub mod mode;
 #[cfg(feature = "formats")]
 pub mod mtl;
 #[cfg(feature = "formats")]
 pub mod obj;
 pub mod params;
+#[cfg(feature = "formats")]
+pub mod ply;
 pub mod ray;
 pub mod resample;
 pub mod rng;

@@ -29,7 +29,7 @@ pub struct SceneFile {
     pub sequence: Option<SequenceSpec>,
 }
 
-/// `[geometry]`: exactly one of `obj`, `gltf` and `builtin`.
+/// `[geometry]`: exactly one of `obj`, `gltf`, `mitsuba` and `builtin`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GeometrySpec {
@@ -43,6 +43,13 @@ pub struct GeometrySpec {
     /// perspective camera); a `[camera]` table overrides either.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gltf_camera: Option<String>,
+    /// Mitsuba 3 XML scene path, relative to the TOML file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mitsuba: Option<String>,
+    /// Values of the Mitsuba file's `$name` parameters (they override its
+    /// `<default>`s, as `mitsuba -D name=value` does).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub mitsuba_params: std::collections::BTreeMap<String, String>,
     /// Name of a built-in scene.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub builtin: Option<String>,
@@ -221,15 +228,18 @@ impl SceneFile {
     pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
         let f: SceneFile = toml::from_str(text)
             .map_err(|e| CoreError::SceneFile { path: path.into(), reason: e.message().replace('\n', " ").trim().to_string() })?;
-        let sources = [f.geometry.obj.is_some(), f.geometry.gltf.is_some(), f.geometry.builtin.is_some()];
+        let sources = [f.geometry.obj.is_some(), f.geometry.gltf.is_some(), f.geometry.mitsuba.is_some(), f.geometry.builtin.is_some()];
         if sources.iter().filter(|&&s| s).count() != 1 {
             return Err(CoreError::SceneFile {
                 path: path.into(),
-                reason: "[geometry] needs exactly one of `obj`, `gltf` and `builtin`".into(),
+                reason: "[geometry] needs exactly one of `obj`, `gltf`, `mitsuba` and `builtin`".into(),
             });
         }
         if f.geometry.gltf_camera.is_some() && f.geometry.gltf.is_none() {
             return Err(CoreError::SceneFile { path: path.into(), reason: "geometry.gltf_camera needs geometry.gltf".into() });
+        }
+        if !f.geometry.mitsuba_params.is_empty() && f.geometry.mitsuba.is_none() {
+            return Err(CoreError::SceneFile { path: path.into(), reason: "geometry.mitsuba_params needs geometry.mitsuba".into() });
         }
         if f.geometry.up != "y" && f.geometry.up != "z" {
             return Err(CoreError::SceneFile {

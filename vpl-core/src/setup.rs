@@ -31,7 +31,7 @@ pub struct SceneSetup {
 
 impl SceneSetup {
     /// Loads `spec`: a built-in name, a `.toml` scene file, an `.obj` file or
-    /// a glTF 2.0 file (`.gltf`, `.glb`).
+    /// a glTF 2.0 file (`.gltf`, `.glb`) or a Mitsuba 3 XML scene (`.xml`).
     pub fn load(spec: &str) -> Result<SceneSetup> {
         let path = Path::new(spec);
         let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -48,11 +48,13 @@ impl SceneSetup {
             }
             #[cfg(not(feature = "formats"))]
             Some("toml") => Err(CoreError::Invalid(format!("{spec}: reading scene files needs vpl-core's `formats` feature"))),
-            Some(ext @ ("obj" | "gltf" | "glb")) => {
+            Some(ext @ ("obj" | "gltf" | "glb" | "xml")) => {
                 let geometry = GeometrySpec {
                     obj: (ext == "obj").then(|| spec.to_string()),
-                    gltf: (ext != "obj").then(|| spec.to_string()),
+                    gltf: (ext == "gltf" || ext == "glb").then(|| spec.to_string()),
                     gltf_camera: None,
+                    mitsuba: (ext == "xml").then(|| spec.to_string()),
+                    mitsuba_params: Default::default(),
                     builtin: None,
                     up: "y".into(),
                     scale: 1.0,
@@ -62,7 +64,7 @@ impl SceneSetup {
                 Self::from_file(file, Path::new(""))
             }
             _ if builtin::NAMES.contains(&spec) => Self::builtin(spec),
-            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf or .glb"))),
+            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf, .glb or .xml"))),
             _ => Err(CoreError::UnknownBuiltin(spec.to_string())),
         }
     }
@@ -99,6 +101,8 @@ impl SceneSetup {
                 }
             } else if file.geometry.gltf.is_some() {
                 gltf_geometry(&file.geometry, base, &mut warnings)?
+            } else if file.geometry.mitsuba.is_some() {
+                mitsuba_geometry(&file.geometry, base, &mut warnings)?
             } else {
                 obj_geometry(&file.geometry, base, &mut warnings)?
             };
@@ -350,6 +354,23 @@ struct Loaded {
     two_sided: bool,
 }
 
+impl Loaded {
+    /// What a scene format that carries its own lights and camera (glTF,
+    /// Mitsuba XML) gives, read from `path`.
+    #[cfg(feature = "formats")]
+    fn scene_file(
+        path: &Path,
+        mesh: crate::mesh::Mesh,
+        materials: Vec<Material>,
+        lights: Vec<LightSpec>,
+        camera: Option<CameraSpec>,
+        two_sided: bool,
+    ) -> Loaded {
+        let lights = (!lights.is_empty()).then_some(lights);
+        Loaded { name: model_name(path), mesh, materials, lights, camera, defaults: None, two_sided }
+    }
+}
+
 /// The map from a description's model frame to the toolkit's world (+Y
 /// up): `up = "z"` turns (x, y, z) into (x, z, −y), then positions scale.
 #[derive(Clone, Copy, Debug)]
@@ -463,16 +484,26 @@ fn gltf_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String
     let p = base.join(geometry.gltf.as_deref().unwrap_or_default());
     let data = crate::gltf_file::load_gltf(&p, geometry.gltf_camera.as_deref())?;
     warnings.extend(data.warnings);
-    let lights = (!data.lights.is_empty()).then_some(data.lights);
-    Ok(Loaded {
-        name: model_name(&p),
-        mesh: data.mesh,
-        materials: data.materials,
-        lights,
-        camera: data.camera,
-        defaults: None,
-        two_sided: true,
-    })
+    Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, true))
+}
+
+/// The Mitsuba XML scene of a description, in the model's frame (the
+/// file's own unless the description says otherwise), with its emitters,
+/// sensor and sidedness.
+#[cfg(feature = "formats")]
+fn mitsuba_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
+    let p = base.join(geometry.mitsuba.as_deref().unwrap_or_default());
+    let params: Vec<(String, String)> = geometry.mitsuba_params.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+    let data = crate::mitsuba::load_mitsuba(&p, &params)?;
+    warnings.extend(data.warnings);
+    Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, data.two_sided))
+}
+
+/// Without the `formats` feature there is no Mitsuba reader.
+#[cfg(not(feature = "formats"))]
+fn mitsuba_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
+    let m = geometry.mitsuba.as_deref().unwrap_or_default();
+    Err(CoreError::Invalid(format!("{m}: reading Mitsuba XML files needs vpl-core's `formats` feature")))
 }
 
 /// Without the `formats` feature there is no OBJ reader.
@@ -497,6 +528,8 @@ impl builtin::Builtin {
                 obj: None,
                 gltf: None,
                 gltf_camera: None,
+                mitsuba: None,
+                mitsuba_params: Default::default(),
                 builtin: Some(self.name.to_string()),
                 up: "y".into(),
                 scale: 1.0,

@@ -105,6 +105,92 @@ pub fn cauchy_ior(ior: f32, abbe: f32, lambda: f32) -> f32 {
     a + b * inv2(lambda)
 }
 
+/// CIE standard illuminant D65, relative spectral power at 10 nm steps
+/// from 360 nm to 830 nm (CIE 15:2004, Table T.1; 100 at 560 nm).
+const D65_10NM: [f32; 48] = [
+    46.6383, 52.0891, 49.9755, 54.6482, 82.7549, 91.486, 93.4318, 86.6823, 104.865, 117.008, 117.812, 114.861, 115.923, 108.811, 109.354,
+    107.802, 104.790, 107.689, 104.405, 104.046, 100.0, 96.3342, 95.788, 88.6856, 90.0062, 89.5991, 87.6987, 83.2886, 83.6992, 80.0268,
+    80.2146, 82.2778, 78.2842, 69.7213, 71.6091, 74.349, 61.604, 69.8856, 75.087, 63.5927, 46.4182, 66.8054, 63.3828, 64.304, 59.4519,
+    51.959, 57.4406, 60.3125,
+];
+
+/// D65 at wavelength `lambda` (nm), linearly interpolated; 0 outside 360–830 nm.
+pub fn d65(lambda: f32) -> f32 {
+    let x = (lambda - 360.0) / 10.0;
+    if !(0.0..=47.0).contains(&x) {
+        return 0.0;
+    }
+    let i = (x as usize).min(46);
+    let t = x - i as f32;
+    D65_10NM[i] * (1.0 - t) + D65_10NM[i + 1] * t
+}
+
+/// What a sampled spectrum describes, which decides how it becomes RGB.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpectrumKind {
+    /// A reflectance in [0, 1], seen under D65 (the white of sRGB): a flat
+    /// spectrum keeps its value in all three channels.
+    Reflectance,
+    /// A coefficient that may exceed 1 (a conductor's η or k): read as a
+    /// reflectance, but not clamped to 1.
+    Unbounded,
+    /// Emitted radiance: its CIE XYZ over ∫ȳ dλ, so that a flat spectrum of
+    /// value v has luminance Y = v (the equal-energy white, slightly pink in
+    /// sRGB).
+    Emission,
+}
+
+/// Linear sRGB of a spectrum given as (wavelength nm, value) pairs in
+/// increasing wavelength, linearly interpolated between them and zero
+/// outside them, as Mitsuba 3's RGB modes read a `<spectrum>` list:
+/// integrated against the CIE 1931 matching functions over 360–830 nm
+/// (D65-weighted and normalised for a reflectance), negative channels cut
+/// to zero and a reflectance's channels to at most 1. `None` when the
+/// wavelengths do not increase or a value is not finite.
+pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Option<Vec3> {
+    if samples.is_empty() || samples.iter().any(|(l, v)| !l.is_finite() || !v.is_finite()) {
+        return None;
+    }
+    if samples.windows(2).any(|w| w[1].0 <= w[0].0) {
+        return None;
+    }
+    if samples.len() == 1 {
+        // One sample: a flat spectrum.
+        let v = samples[0].1;
+        return Some(match kind {
+            SpectrumKind::Reflectance => Vec3::splat(v.clamp(0.0, 1.0)),
+            SpectrumKind::Unbounded => Vec3::splat(v.max(0.0)),
+            SpectrumKind::Emission => (xyz_to_rgb(Vec3::ONE) * v).max(Vec3::ZERO),
+        });
+    }
+    let value = |l: f32| -> f32 {
+        if l < samples[0].0 || l > samples[samples.len() - 1].0 {
+            return 0.0;
+        }
+        let i = samples.partition_point(|s| s.0 <= l).clamp(1, samples.len() - 1);
+        let (l0, v0) = samples[i - 1];
+        let (l1, v1) = samples[i];
+        v0 + (v1 - v0) * (l - l0) / (l1 - l0)
+    };
+    let illuminant = |l: f32| if kind == SpectrumKind::Emission { 1.0 } else { d65(l) };
+    let (steps, lo, hi) = (940usize, 360.0f32, 830.0f32);
+    let dl = (hi - lo) / steps as f32;
+    let (mut xyz, mut white) = (Vec3::ZERO, Vec3::ZERO);
+    for k in 0..steps {
+        let l = lo + (k as f32 + 0.5) * dl;
+        let cmf = cie_xyz(l) * illuminant(l);
+        xyz += cmf * value(l);
+        white += cmf;
+    }
+    Some(match kind {
+        // Divided by the illuminant's own colour, channel by channel: a flat
+        // reflectance stays grey despite the fit's small errors.
+        SpectrumKind::Reflectance => (xyz_to_rgb(xyz) / xyz_to_rgb(white)).clamp(Vec3::ZERO, Vec3::ONE),
+        SpectrumKind::Unbounded => (xyz_to_rgb(xyz) / xyz_to_rgb(white)).max(Vec3::ZERO),
+        SpectrumKind::Emission => (xyz_to_rgb(xyz) / white.y).max(Vec3::ZERO),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,6 +200,23 @@ mod tests {
         let n = 4000;
         let mean: Vec3 = (0..n).map(|i| sample_wavelength((i as f32 + 0.5) / n as f32).weight).sum::<Vec3>() / n as f32;
         assert!((mean - Vec3::ONE).abs().max_element() < 2e-3, "{mean}");
+    }
+
+    #[test]
+    fn flat_spectra_keep_their_value() {
+        let r = spectrum_to_rgb(&[(400.0, 0.5), (700.0, 0.5)], SpectrumKind::Reflectance).unwrap();
+        // 400–700 nm leaves out a little of the visible range: a few per mille.
+        assert!((r - Vec3::splat(0.5)).abs().max_element() < 0.01, "{r}");
+        let e = spectrum_to_rgb(&[(360.0, 2.0), (830.0, 2.0)], SpectrumKind::Emission).unwrap();
+        // The equal-energy white in linear sRGB (XYZ = (1, 1, 1) taken to sRGB), times 2.
+        assert!((e - xyz_to_rgb(Vec3::ONE) * 2.0).abs().max_element() < 0.02, "{e}");
+        assert!(spectrum_to_rgb(&[(500.0, 1.0), (400.0, 1.0)], SpectrumKind::Emission).is_none());
+    }
+
+    #[test]
+    fn red_reflectance_is_red() {
+        let r = spectrum_to_rgb(&[(400.0, 0.05), (580.0, 0.05), (620.0, 0.6), (700.0, 0.6)], SpectrumKind::Reflectance).unwrap();
+        assert!(r.x > 0.3 && r.y < 0.15 && r.z < 0.1, "{r}");
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::table1::rows::scenes_dir;
 /// side (330K), or the scenes given.
 #[derive(clap::Args)]
 pub(super) struct Args {
-    /// Scenes (built-in names, .toml, .obj, .gltf or .glb files); default: cornell, Sponza and its copies.
+    /// Scenes (built-in names, .toml, .obj, .gltf, .glb or Mitsuba .xml files); default: cornell, Sponza and its copies.
     #[arg(long, value_delimiter = ',')]
     scene: Vec<String>,
     /// Copies side by side of the last scene given (or of Sponza), as one more row (1: none).

@@ -99,7 +99,7 @@ enum ModeArg {
 /// What to render: scene, frame, path tracer settings, threads.
 #[derive(clap::Args)]
 struct SceneArgs {
-    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file, an .obj file or a glTF 2.0 file (.gltf, .glb).
+    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file, an .obj file, a glTF 2.0 file (.gltf, .glb) or a Mitsuba 3 XML scene (.xml).
     #[arg(long)]
     scene: String,
     /// Frame of the scene's sequence.
@@ -383,7 +383,9 @@ where
     match dispatch(cli, registry) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("vpl: error: {e}");
+            // One line, whatever a library's message holds.
+            let line: String = e.to_string().chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+            eprintln!("vpl: error: {}", line.trim());
             2
         }
     }

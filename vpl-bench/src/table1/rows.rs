@@ -276,7 +276,7 @@ impl Row {
             Ok(f) => f,
             Err(e) => return Some(format!("{}: {e}", path.display())),
         };
-        let obj = described.geometry.obj.or(described.geometry.gltf)?;
+        let obj = described.geometry.obj.or(described.geometry.gltf).or(described.geometry.mitsuba)?;
         let model = scenes_dir().join(&obj);
         (!model.is_file()).then(|| format!("its model {} is not there", model.display()))
     }

@@ -79,10 +79,27 @@ impl MeanComparison {
 /// (pixels independent; this bounds the luminance's error, so it is
 /// conservative); the VPL renderer's is the spread over seeds.
 pub fn vpl_against_path_tracer(scene: &Scene, camera: &vpl_core::Camera, vpls: usize, seeds: u64, paths: u32) -> MeanComparison {
+    sampler_against_path_tracer(scene, camera, "ir", vpl_core::Mode::Full, 5, vpls, seeds, paths)
+}
+
+/// [`vpl_against_path_tracer`] with the built-in sampler `sampler`, the
+/// light paths of `mode` and both renderers at `depth` (Mitsuba's
+/// convention: 3 = direct light and one indirect bounce).
+#[allow(clippy::too_many_arguments)] // each is one setting of the comparison, named at the call
+pub fn sampler_against_path_tracer(
+    scene: &Scene,
+    camera: &vpl_core::Camera,
+    sampler: &str,
+    mode: vpl_core::Mode,
+    depth: u32,
+    vpls: usize,
+    seeds: u64,
+    paths: u32,
+) -> MeanComparison {
     use vpl_core::image::luminance;
     let (w, h) = camera.resolution;
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
-    let pt = vpl_pathtrace::PathTracer::new(5, vpl_core::Mode::Full);
+    let pt = vpl_pathtrace::PathTracer::new(depth, mode);
     let tracked = vpl_pathtrace::track_with(scene, camera, &pt, &pixels, paths, 3, 0, vpl_pathtrace::Footprint::Centre);
     let n = tracked.len() as f64;
     let m_pt = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / n;
@@ -90,12 +107,13 @@ pub fn vpl_against_path_tracer(scene: &Scene, camera: &vpl_core::Camera, vpls: u
     let means: Vec<f64> = (0..seeds)
         .map(|seed| {
             let mut r = vpl_render::Renderer::builder(scene)
-                .sampler("ir")
+                .sampler(sampler)
+                .max_depth(depth)
                 .vpls(vpls)
                 .seed(seed)
                 .visibility(vpl_render::VisibilitySpec::RayTraced)
                 .shader(vpl_render::ShadingSpec::Exhaustive)
-                .mode(vpl_core::Mode::Full)
+                .mode(mode)
                 .clamp(vpl_render::Clamp::Off)
                 .build()
                 .expect("an IR renderer");

@@ -38,11 +38,7 @@ fn gltf_scenes_render_with_their_light_as_the_path_tracer_does() {
         // ("Material", κ 0.58) would be black there and glossy in the path
         // tracer (3.6 % of the image). Both render the albedo-only scene, so
         // what is compared is the geometry and light the file carries.
-        let mut scene = setup.scene.clone();
-        for m in scene.materials.iter_mut() {
-            m.layered = None;
-        }
-        let scene = &scene;
+        let scene = &setup.scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
         assert!(!scene.lights.is_empty(), "{name}");
         let camera = setup.camera.with_resolution((48, 36)).unwrap();
         // Through each pixel's centre, the point the G-buffer shades.

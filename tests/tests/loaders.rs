@@ -203,7 +203,7 @@ fn sequences_move_camera_and_lights() {
 #[test]
 fn real_scene_files_load_when_their_models_are_present() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    for (file, triangles) in [("sponza-dabrovic.toml", 60_000), ("city-munich.toml", 30_000)] {
+    for (file, triangles) in [("sponza-dabrovic.toml", 60_000), ("city-munich.toml", 30_000), ("city-munich-sky.toml", 30_000)] {
         let path = root.join(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap().trim_matches('"');

@@ -29,11 +29,7 @@ fn mitsuba_scenes_render_with_their_light_as_the_path_tracer_does() {
         // cubes would be black there and glossy in the path tracer. Both
         // render the albedo-only scene, so what is compared is the
         // geometry, sidedness and light the file carries.
-        let mut scene = setup.scene.clone();
-        for m in scene.materials.iter_mut() {
-            m.layered = None;
-        }
-        let scene = &scene;
+        let scene = &setup.scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
         let camera = setup.camera.with_resolution(size).unwrap();
         let c = vpl_against_path_tracer(scene, &camera, 1024, 8, 128);
         let z = c.z(1e-5);

@@ -97,6 +97,8 @@ fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), CoreEr
 fn reference(scene: &Scene, camera: &Camera, clamp: Option<GeometryClamp>, spp: u32, seed: u64) -> Result<(Image, Image, f64), CoreError> {
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = clamp;
+    // The reference draws the materials as the VPL renders it is set beside do.
+    let scene = &scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
     let r = render(scene, camera, &pt, RenderSettings { spp, seed, frame: 0 }, &|_, _| {}).map_err(err)?;
     Ok((r.image, r.stderr, r.seconds))
 }

@@ -179,7 +179,9 @@ pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) ->
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = Some(clamp);
     progress(&format!("corner reference: path tracer, indirect, {} spp", s.reference_spp));
-    let (reference, stderr) = centre_reference(&setup.scene, &camera, &pt, s.reference_spp, s.seed ^ 0xEF);
+    // The reference draws the materials as the VPL methods do.
+    let truth_scene = setup.scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
+    let (reference, stderr) = centre_reference(&truth_scene, &camera, &pt, s.reference_spp, s.seed ^ 0xEF);
     let var = reference_variance(&stderr);
     let (ir, ir_image) = run("corner", "ir", s, Some((&reference, var)), progress)?;
     let (rr, rr_image) = run("corner", "rr", s, Some((&reference, var)), progress)?;

@@ -468,3 +468,41 @@ fn progressive_renders_passes_and_snapshots() {
     assert!(vpl_core::Image::read_exr(dir.join("c.exr")).unwrap().mean()[0] > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The loader's traps say what they are, one line each: a camera that sees
+/// nothing, a camera behind one-sided walls, and layered materials that the
+/// VPL pipeline (and the path tracer with `--materials diffuse`) draw by
+/// their diffuse part. A clean render says none of it.
+#[test]
+fn views_of_nothing_and_dropped_layers_are_warned_in_one_line() {
+    let d = scratch("warnings");
+    let out = d.join("r.exr");
+    let run = |args: &[&str]| {
+        let o = vpl().arg("render").args(args).args(["--size", "16x12", "--quiet", "--out"]).arg(&out).output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.starts_with("vpl: warning:")).map(str::to_string).collect::<Vec<_>>()
+    };
+    // Cornell's camera turned around, and moved behind the box (a sequence
+    // of its own, without camera keys, keeps the camera where it is put).
+    let away = write(
+        &d,
+        "away.toml",
+        "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0.0, 0.0, 3.9]\ntarget = [0.0, 0.0, 8.0]\nfov = 40.0\n[sequence]\nduration = 1.0\n",
+    );
+    let w = run(&["--scene", &away, "--spp", "1"]);
+    assert!(w.len() == 1 && w[0].contains("the camera sees no surface"), "{w:?}");
+    let behind = write(
+        &d,
+        "behind.toml",
+        "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0.2, 0.1, -6.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 40.0\n[sequence]\nduration = 1.0\n",
+    );
+    let w = run(&["--scene", &behind, "--spp", "1"]);
+    assert!(w.len() == 1 && w[0].contains("only the back of one-sided surfaces"), "{w:?}");
+    // The glass scene's sphere is layered.
+    let w = run(&["--scene", "glass", "--method", "vpl", "--vpls", "64"]);
+    assert!(w.iter().any(|l| l.contains("the VPL pipeline") && l.contains("glass")), "{w:?}");
+    let w = run(&["--scene", "glass", "--spp", "1", "--materials", "diffuse"]);
+    assert!(w.iter().any(|l| l.contains("the path tracer") && l.contains("glass")), "{w:?}");
+    assert!(run(&["--scene", "glass", "--spp", "1"]).is_empty());
+    assert!(run(&["--scene", "cornell", "--method", "vpl", "--vpls", "64"]).is_empty());
+}

@@ -25,7 +25,9 @@ impl Scene {
     /// leaving it: a point (`u_pos`) and a direction (`u_dir`). Area lights
     /// emit cosine-distributed from a uniform point, point lights uniformly
     /// over the sphere, spots uniformly inside their cone, the sun from a
-    /// disk of the scene's bounding radius that faces it. `None` when the
+    /// disk of the scene's bounding radius that faces it, the environment
+    /// along a direction drawn as [`crate::environment::Sky::sample`] draws
+    /// it, from such a disk facing that direction. `None` when the
     /// sample carries nothing.
     pub fn sample_emission(&self, u_select: f32, u_pos: (f32, f32), u_dir: (f32, f32)) -> Option<EmittedRay> {
         let (i, p_select) = self.light_distribution.sample(u_select);
@@ -73,6 +75,21 @@ impl Scene {
                 // E over a disk of area π r².
                 (Ray::new(o, *direction), *irradiance * (PI * r * r))
             }
+            Light::Environment { sky } => {
+                // ω toward the sky; the light travels along −ω.
+                let (w, pdf) = sky.sample(u_dir);
+                if !(pdf > 0.0) {
+                    return None;
+                }
+                let (lo, hi) = self.geometry.bounds;
+                let r = self.radius();
+                let d = -w;
+                let f = LocalFrame::from_normal(d);
+                let q = concentric_disk(u_pos.0, u_pos.1) * r;
+                let o = 0.5 * (lo + hi) - d * (1.01 * r) + f.s * q.x + f.t * q.y;
+                // L(ω)·cos over (p(ω) · 1/(π r²)): the radiance through a disk facing ω.
+                (Ray::new(o, d), sky.radiance(w) * (PI * r * r / pdf))
+            }
         };
         if !(beta.max_element() > 0.0) {
             return None;
@@ -98,6 +115,9 @@ mod tests {
             Light::Point { position: Vec3::Y, intensity: Vec3::new(1.0, 2.0, 3.0) },
             Light::Spot { position: Vec3::Y, direction: -Vec3::Y, intensity: Vec3::splat(5.0), cos_falloff_start: 0.9, cos_total: 0.8 },
             Light::Directional { direction: -Vec3::Y, irradiance: Vec3::splat(2.0) },
+            Light::Environment {
+                sky: crate::environment::Sky { zenith: Vec3::new(0.2, 0.4, 1.0), horizon: Vec3::splat(0.8), nadir: Vec3::splat(0.1) },
+            },
         ];
         let s = Scene::new("q", &mesh, vec![Material::emissive("m", Vec3::splat(0.5), Vec3::splat(0.7))], lights, true).unwrap();
         let total: f64 = (0..s.lights.len())

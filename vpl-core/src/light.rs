@@ -1,5 +1,7 @@
-//! Light sources: one-sided emissive triangles, point, spot and directional (sun).
+//! Light sources: one-sided emissive triangles, point, spot, directional
+//! (sun) and the environment (sky).
 
+use crate::environment::Sky;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -42,6 +44,12 @@ pub enum Light {
         /// Irradiance (W/m²) on a surface facing the light.
         irradiance: Vec3,
     },
+    /// Light arriving from infinitely far away in every direction: what a
+    /// ray that leaves the scene sees ([`Sky`]).
+    Environment {
+        /// Radiance by direction.
+        sky: Sky,
+    },
 }
 
 /// Mean of the RGB channels: the scalar that power-proportional selection uses.
@@ -53,7 +61,8 @@ pub fn channel_mean(c: Vec3) -> f32 {
 impl Light {
     /// Emitted power Φ (scalar, channel mean): π·A·Le for a one-sided area light,
     /// 4π·I for a point light, 2π·I·(1 − (cos_start + cos_total)/2) for a spot
-    /// (pbrt-v4 §12.2.2), π·r²·E for the sun over a scene of bounding radius r.
+    /// (pbrt-v4 §12.2.2), π·r²·E for the sun and π·r²·∫L dω for the
+    /// environment over a scene of bounding radius r.
     /// `area` is the triangle's area (ignored for other lights).
     pub fn power(&self, area: f32, scene_radius: f32) -> f32 {
         match self {
@@ -63,11 +72,19 @@ impl Light {
                 2.0 * PI * channel_mean(*intensity) * (1.0 - 0.5 * (cos_falloff_start + cos_total))
             }
             Light::Directional { irradiance, .. } => PI * scene_radius * scene_radius * channel_mean(*irradiance),
+            Light::Environment { sky } => sky.power(scene_radius),
         }
     }
 
-    /// True for lights that cannot be hit by a ray (point, spot, sun).
+    /// True for lights of one position or one direction (point, spot, sun):
+    /// no other sampling technique can find them, so they take no MIS.
     pub fn is_delta(&self) -> bool {
+        !matches!(self, Light::Area { .. } | Light::Environment { .. })
+    }
+
+    /// True for the lights a scene holds besides its emissive triangles
+    /// (what a scene file describes, and an animation moves).
+    pub fn is_extra(&self) -> bool {
         !matches!(self, Light::Area { .. })
     }
 

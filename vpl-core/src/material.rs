@@ -87,3 +87,22 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 }
+
+/// Which materials a render draws: the scene's own, or their diffuse part.
+///
+/// The VPL pipeline reads a material's albedo only: a layered material
+/// (glass, a mirror, a glossy coat) is drawn there by its Lambertian base.
+/// A comparison between methods is fair when every method draws the same
+/// surfaces, so the path tracer, the reference of every comparison, can
+/// draw them the same way ([`MaterialPolicy::Diffuse`], `--materials
+/// diffuse`), and Table 1 and the figures compute their truth so.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MaterialPolicy {
+    /// Each material as the scene gives it (the path tracer and the
+    /// progressive renderer follow the κ-layered model).
+    #[default]
+    AsIs,
+    /// Each material by its albedo alone (its layers dropped), as the VPL
+    /// pipeline draws it.
+    Diffuse,
+}

@@ -55,6 +55,8 @@ impl Purpose {
     pub const COMPENSATION: Purpose = Purpose(20);
     /// Bootstrap draws of a table's confidence intervals (index = table row).
     pub const CONFIDENCE: Purpose = Purpose(21);
+    /// Light samples of the check of what a camera sees (index = grid ray).
+    pub const VIEW: Purpose = Purpose(22);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

@@ -62,6 +62,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// `tri_light[t]` is the light index of emissive triangle `t`, or `u32::MAX`.
     pub tri_light: Vec<u32>,
+    /// Index of the environment light in `lights`, if there is one.
+    pub environment: Option<usize>,
     /// Light selection proportional to power.
     pub light_distribution: Distribution1D,
     /// Whether diffuse surfaces reflect on both sides (`false`: back faces are black, as in Mitsuba).
@@ -163,6 +165,7 @@ impl Scene {
             materials,
             lights: Vec::new(),
             tri_light: Vec::new(),
+            environment: None,
             light_distribution: Distribution1D::default(),
             two_sided,
             warnings,
@@ -192,6 +195,10 @@ impl Scene {
         for (i, l) in extra_lights.iter().enumerate() {
             crate::validate::light(l, i)?;
         }
+        if extra_lights.iter().filter(|l| matches!(l, Light::Environment { .. })).count() > 1 {
+            return Err(CoreError::Invalid(format!("{}: a scene has at most one environment light", self.name)));
+        }
+        let environment = extra_lights.iter().position(|l| matches!(l, Light::Environment { .. })).map(|i| lights.len() + i);
         lights.extend(extra_lights);
         let radius = self.radius();
         let powers: Vec<f32> = lights
@@ -217,13 +224,46 @@ impl Scene {
         let dist = Distribution1D::new(&powers).ok_or_else(|| CoreError::NoLights(self.name.clone()))?;
         self.lights = lights;
         self.tri_light = tri_light;
+        self.environment = environment;
         self.light_distribution = dist;
         Ok(())
     }
 
     /// The lights that are not emissive triangles (what [`Scene::with_lights`] replaces).
     pub fn extra_lights(&self) -> Vec<Light> {
-        self.lights.iter().filter(|l| l.is_delta()).cloned().collect()
+        self.lights.iter().filter(|l| l.is_extra()).cloned().collect()
+    }
+
+    /// Names of the materials with κ-layered parameters (those the VPL
+    /// pipeline draws by their albedo alone).
+    pub fn layered_materials(&self) -> Vec<&str> {
+        self.materials.iter().filter(|m| m.layered.is_some()).map(|m| m.name.as_str()).collect()
+    }
+
+    /// This scene drawn by `policy`: itself, or a copy whose materials keep
+    /// only their albedo and emission ([`MaterialPolicy::Diffuse`]; the
+    /// geometry is shared).
+    pub fn with_material_policy(&self, policy: crate::material::MaterialPolicy) -> Scene {
+        let mut s = self.clone();
+        if policy == crate::material::MaterialPolicy::Diffuse {
+            for m in s.materials.iter_mut() {
+                m.layered = None;
+            }
+        }
+        s
+    }
+
+    /// The one-line note a renderer that draws `policy` should give about
+    /// this scene (`None` when no material changes): which layered materials
+    /// are drawn by their diffuse part.
+    pub fn material_policy_note(&self, policy: crate::material::MaterialPolicy, who: &str) -> Option<String> {
+        let names = self.layered_materials();
+        if policy == crate::material::MaterialPolicy::AsIs || names.is_empty() {
+            return None;
+        }
+        let shown: Vec<&str> = names.iter().take(5).copied().collect();
+        let more = if names.len() > shown.len() { format!(" and {} more", names.len() - shown.len()) } else { String::new() };
+        Some(format!("{who} draws {} layered material(s) ({}{more}) by their diffuse part only", names.len(), shown.join(", ")))
     }
 
     /// Radius of the bounding sphere of the scene's bounds.
@@ -434,6 +474,33 @@ impl Scene {
             Light::Directional { direction, irradiance } => {
                 Some(LightSample { wi: -*direction, dist: f32::INFINITY, li: *irradiance, pdf: 1.0, delta: true })
             }
+            Light::Environment { sky } => {
+                let (wi, pdf) = sky.sample(u);
+                if pdf.is_nan() || pdf <= 0.0 {
+                    return None;
+                }
+                Some(LightSample { wi, dist: f32::INFINITY, li: sky.radiance(wi), pdf, delta: false })
+            }
+        }
+    }
+
+    /// Radiance the environment sends along a ray that leaves the scene in
+    /// direction `d` (zero without an environment light).
+    #[inline]
+    pub fn environment_radiance(&self, d: Vec3) -> Vec3 {
+        match self.environment.map(|i| &self.lights[i]) {
+            Some(Light::Environment { sky }) => sky.radiance(d),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Solid-angle density with which [`Scene::sample_light`] would pick
+    /// direction `d` of the environment (for MIS; zero without one).
+    #[inline]
+    pub fn environment_pdf(&self, d: Vec3) -> f32 {
+        match self.environment.map(|i| (i, &self.lights[i])) {
+            Some((i, Light::Environment { sky })) => self.light_distribution.pmf(i) * sky.pdf(d),
+            _ => 0.0,
         }
     }
 

@@ -124,6 +124,20 @@ pub enum LightSpec {
         /// Irradiance (W/m²) on a surface facing the sun.
         irradiance: [f32; 3],
     },
+    /// Light from infinitely far away: a constant environment, or a sky
+    /// whose radiance runs linearly in height from the zenith (the model's
+    /// up) to the horizon and on to the ground.
+    Environment {
+        /// Radiance (W/m²/sr) at the zenith, and everywhere when the other
+        /// two are absent.
+        radiance: [f32; 3],
+        /// Radiance along the horizon (default: `radiance`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        horizon: Option<[f32; 3]>,
+        /// Radiance from straight below (default: `horizon`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ground: Option<[f32; 3]>,
+    },
 }
 
 /// `[[materials]]`: overrides of a named material.

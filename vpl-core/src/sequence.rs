@@ -57,14 +57,20 @@ fn interpolate<K>(keys: &[&K], t: f32, time: impl Fn(&K) -> f32, value: impl Fn(
 }
 
 impl Sequence {
-    /// Number of frames, `round(duration · fps)`, at least 1.
+    /// Number of frames: the first at t = 0, then one every 1/fps, and the
+    /// last at t = `duration` exactly, so `⌈duration · fps⌉ + 1` (a
+    /// duration of 3 s at 2 fps has 7 frames, t = 0, 0.5, …, 3; the last
+    /// interval is shorter when duration · fps is not a whole number).
     pub fn frame_count(&self) -> u32 {
-        ((self.duration * self.fps).round() as u32).max(1)
+        let n = self.duration * self.fps;
+        // A whole number that rounding put a hair above itself stays whole.
+        let intervals = if (n - n.round()).abs() <= 1e-4 * n.max(1.0) { n.round() } else { n.ceil() };
+        (intervals.max(0.0) as u32).saturating_add(1)
     }
 
-    /// Time of frame `f` in seconds.
+    /// Time of frame `f` in seconds: f/fps, and `duration` for the last.
     pub fn time(&self, frame: u32) -> f32 {
-        frame as f32 / self.fps
+        (frame as f32 / self.fps).min(self.duration)
     }
 
     /// Camera (origin, target) at time `t`, if the sequence moves the camera.
@@ -89,6 +95,25 @@ impl Sequence {
 mod tests {
     use super::*;
 
+    /// The last frame reaches the last key: 3 s at 2 fps is t = 0 … 3.
+    #[test]
+    fn the_last_frame_is_at_the_end() {
+        let key = |t, x| CameraKey { t, origin: Vec3::new(x, 0.0, 0.0), target: Vec3::Z };
+        let s = Sequence { fps: 2.0, duration: 3.0, camera: vec![key(0.0, 0.0), key(3.0, 6.0)], lights: vec![] };
+        assert_eq!(s.frame_count(), 7);
+        let times: Vec<f32> = (0..7).map(|f| s.time(f)).collect();
+        assert_eq!(times, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0]);
+        assert_eq!(s.camera_at(s.time(6)).unwrap().0.x, 6.0);
+        // 2.2 s at 2 fps: t = 0, 0.5, …, 2.0 and 2.2.
+        let odd = Sequence { duration: 2.2, ..s.clone() };
+        assert_eq!(odd.frame_count(), 6);
+        assert_eq!(odd.time(5), 2.2);
+        // 20 s at 30 fps: 601 frames, though 20 · 30 in f32 is not exactly 600.
+        let long = Sequence { fps: 30.0, duration: 20.0, ..s };
+        assert_eq!(long.frame_count(), 601);
+        assert_eq!(long.time(600), 20.0);
+    }
+
     #[test]
     fn interpolates_and_clamps() {
         let s = Sequence {
@@ -100,7 +125,8 @@ mod tests {
             ],
             lights: vec![LightKey { light: 0, t: 1.0, position: Some(Vec3::Y), direction: None }],
         };
-        assert_eq!(s.frame_count(), 60);
+        assert_eq!(s.frame_count(), 61);
+        assert_eq!(s.time(60), 2.0);
         assert_eq!(s.camera_at(1.0).unwrap().0, Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(s.camera_at(5.0).unwrap().0, Vec3::new(2.0, 0.0, 0.0));
         assert_eq!(s.light_at(0, 0.0).0, Some(Vec3::Y));

@@ -181,7 +181,7 @@ impl SceneSetup {
                     *direction = d.filter(|d| *d != Vec3::ZERO).unwrap_or(*direction);
                 }
                 Light::Directional { direction, .. } => *direction = d.filter(|d| *d != Vec3::ZERO).unwrap_or(*direction),
-                Light::Area { .. } => {}
+                Light::Area { .. } | Light::Environment { .. } => {}
             }
         }
         Ok((self.scene.with_lights(lights)?, camera))
@@ -262,6 +262,12 @@ pub fn light_from_spec(s: &LightSpec) -> Result<Light> {
                 return Err(CoreError::Invalid("sun direction must be nonzero".into()));
             }
             Light::Directional { direction: d, irradiance: nonneg(*irradiance, "sun irradiance")? }
+        }
+        LightSpec::Environment { radiance, horizon, ground } => {
+            let zenith = nonneg(*radiance, "environment radiance")?;
+            let horizon = horizon.map(|h| nonneg(h, "environment horizon")).transpose()?.unwrap_or(zenith);
+            let nadir = ground.map(|g| nonneg(g, "environment ground")).transpose()?.unwrap_or(horizon);
+            Light::Environment { sky: crate::environment::Sky { zenith, horizon, nadir } }
         }
     })
 }
@@ -415,6 +421,8 @@ impl ModelFrame {
                 LightSpec::Spot { position: self.p(position), direction: self.d(direction), intensity, angle, falloff_start }
             }
             LightSpec::Directional { direction, irradiance } => LightSpec::Directional { direction: self.d(direction), irradiance },
+            // The sky's zenith is the toolkit's +Y, which is the model's up.
+            e @ LightSpec::Environment { .. } => e,
         }
     }
 
@@ -661,5 +669,39 @@ mod frame_tests {
         );
         let again = SceneSetup::from_file(SceneFile::parse(&bare.to_toml(), Path::new("b.toml")).unwrap(), dir.path()).unwrap();
         assert!((again.camera.origin - bare.camera.origin).length() < 1e-4, "{:?} {:?}", again.camera.origin, bare.camera.origin);
+    }
+}
+
+#[cfg(all(test, feature = "formats"))]
+mod environment_tests {
+    use super::*;
+    use crate::environment::Sky;
+
+    /// A `[[lights]]` environment with a gradient becomes the scene's
+    /// environment light, keeps its zenith at the toolkit's +Y in a Z-up
+    /// file, survives animation frames, lights a scene alone, and writes
+    /// back the same.
+    #[test]
+    fn an_environment_entry_is_the_scenes_sky() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("z.obj"), "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nf 1 2 3\n").unwrap();
+        let text = "[geometry]\nobj = \"z.obj\"\nup = \"z\"\n\
+                    [[lights]]\ntype = \"environment\"\nradiance = [0.2, 0.3, 0.9]\nhorizon = [1.0, 1.0, 1.0]\n\
+                    [sequence]\nduration = 1.0\n";
+        let p = dir.path().join("s.toml");
+        std::fs::write(&p, text).unwrap();
+        let s = SceneSetup::load(p.to_str().unwrap()).unwrap();
+        let sky = Sky { zenith: Vec3::new(0.2, 0.3, 0.9), horizon: Vec3::ONE, nadir: Vec3::ONE };
+        let i = s.scene.environment.expect("an environment light");
+        assert_eq!(s.scene.lights[i], Light::Environment { sky });
+        assert!((s.scene.environment_radiance(Vec3::Y) - sky.zenith).abs().max_element() < 1e-6);
+        let (frame, _) = s.frame(1).unwrap();
+        assert_eq!(frame.environment.map(|i| frame.lights[i].clone()), Some(Light::Environment { sky }));
+        let back = SceneFile::parse(&s.to_toml(), Path::new("back.toml")).unwrap();
+        assert_eq!(back.lights, s.description.lights);
+        // Two environments are refused.
+        let two = text.replace("[sequence]", "[[lights]]\ntype = \"environment\"\nradiance = [1.0, 1.0, 1.0]\n[sequence]");
+        std::fs::write(&p, two).unwrap();
+        assert!(SceneSetup::load(p.to_str().unwrap()).unwrap_err().to_string().contains("at most one environment"));
     }
 }

@@ -121,6 +121,11 @@ pub fn light(l: &Light, index: usize) -> Result<()> {
             direction(*d)?;
             colour(*irradiance, MAX_IRRADIANCE, &what("irradiance"))
         }
+        Light::Environment { sky } => {
+            colour(sky.zenith, MAX_RADIANCE, &what("radiance"))?;
+            colour(sky.horizon, MAX_RADIANCE, &what("horizon"))?;
+            colour(sky.nadir, MAX_RADIANCE, &what("ground"))
+        }
     }
 }
 

@@ -169,8 +169,8 @@ fn outside_the_subset_is_one_error_naming_element_and_line() {
         ("<shape type=\"cylinder\"/>", "x.xml:2: <shape type=\"cylinder\"> is not supported"),
         ("\n<bsdf type=\"principled\" id=\"p\"/>\n<shape type=\"cube\"><ref id=\"p\"/></shape>", "x.xml:3: <bsdf type=\"principled\""),
         (
-            "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1\"/></emitter>",
-            "x.xml:2: <emitter type=\"constant\"> is not supported",
+            "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/></emitter>",
+            "x.xml:2: <emitter type=\"envmap\"> is not supported",
         ),
         ("<shape type=\"cube\"><ref id=\"nope\"/></shape>", "<ref id=\"nope\">: no object has this id"),
         ("<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>", "parameter $r has no value"),
@@ -214,12 +214,14 @@ fn emitters_textures_and_sidedness() {
              <emitter type=\"spot\"><transform name=\"to_world\"><lookat origin=\"0,4,0\" target=\"0,0,0\" up=\"0,0,1\"/></transform>\
              <float name=\"cutoff_angle\" value=\"30\"/></emitter>\n\
              <emitter type=\"directional\"><vector name=\"direction\" x=\"0\" y=\"-2\" z=\"0\"/><spectrum name=\"irradiance\" value=\"3\"/></emitter>\n\
+             <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.5, 0.6, 0.7\"/></emitter>\n\
              <shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\">\
              <texture type=\"checkerboard\" name=\"reflectance\"><rgb name=\"color0\" value=\"0.6\"/></texture></bsdf></bsdf></shape>"
         ),
     )
     .unwrap();
-    assert_eq!(d.lights.len(), 3);
+    assert_eq!(d.lights.len(), 4);
+    assert_eq!(d.lights[3], LightSpec::Environment { radiance: [0.5, 0.6, 0.7], horizon: None, ground: None });
     assert_eq!(d.lights[0], LightSpec::Point { position: [1.0, 2.0, 3.0], intensity: [5.0; 3] });
     let LightSpec::Spot { position, direction, angle, falloff_start, .. } = &d.lights[1] else { panic!() };
     assert_eq!((*position, *angle, *falloff_start), ([0.0, 4.0, 0.0], 30.0, Some(22.5)));

@@ -65,7 +65,9 @@ impl Backend for GpuBackend {
     }
 
     fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {
-        self.gpu.render_gbuffer(scene, camera).map_err(err)
+        let mut g = self.gpu.render_gbuffer(scene, camera).map_err(err)?;
+        vpl_shading::environment_at_misses(&mut g, scene, camera);
+        Ok(g)
     }
 
     /// Each per-pixel buffer (16 bytes a pixel) must fit the adapter's

@@ -22,6 +22,9 @@ struct Params {
     two_sided: u32,
     eps: f32,
     row: u32,
+    /// Index of the environment light, `u32::MAX` without one.
+    env: u32,
+    pad: [u32; 3],
 }
 
 /// Vertices from which the CPU path tracer plays Russian roulette.
@@ -86,6 +89,7 @@ impl GpuRadiosity {
                     Light::Directional { direction, irradiance } => {
                         [head(3, 0, 0.0), direction.extend(0.0), irradiance.extend(0.0), Vec4::ZERO]
                     }
+                    Light::Environment { sky } => [head(4, 0, 0.0), sky.zenith.extend(0.0), sky.horizon.extend(0.0), sky.nadir.extend(0.0)],
                 }
             })
             .collect();
@@ -100,6 +104,8 @@ impl GpuRadiosity {
             two_sided: scene.two_sided as u32,
             eps: scene.epsilon(),
             row: groups.0 * 64,
+            env: scene.environment.map_or(u32::MAX, |i| i as u32),
+            pad: [0; 3],
         };
         let b_params = uniform(ctx, "radiosity params", &params);
         let b_jobs = storage_init(ctx, "radiosity jobs", &jobs);

@@ -6,9 +6,10 @@
 //
 // jobs: three vec4 per point: [p, material], [n, two flags], [ng, -].
 // rng: per (point, path) the PCG32 state (lo, hi) and increment (lo, hi).
-// lights: four vec4 per light: [type (0 area, 1 point, 2 spot, 3 sun),
-//   triangle, spot cos_total, -], [position or direction, -],
-//   [radiance / intensity / irradiance, -], [spot direction, cos_falloff_start].
+// lights: four vec4 per light: [type (0 area, 1 point, 2 spot, 3 sun,
+//   4 environment), triangle, spot cos_total, -], [position or direction,
+//   or the sky's zenith, -], [radiance / intensity / irradiance, or the
+//   sky's horizon, -], [spot direction, cos_falloff_start, or the sky's nadir].
 // light_cdf, light_pmf: the power distribution (vpl_core Distribution1D).
 // tri_light: the light of each emissive triangle, NONE elsewhere.
 
@@ -21,6 +22,11 @@ struct Params {
     two_sided: u32,
     eps: f32,
     row: u32,
+    // Index of the environment light, NONE without one.
+    env: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
@@ -34,6 +40,7 @@ struct Params {
 
 const FRAC_1_PI: f32 = 0.31830987;
 const FRAC_PI_4: f32 = 0.7853982;
+const TWO_PI: f32 = 6.2831855;
 
 // ---- PCG32 on 32-bit words ----
 
@@ -147,6 +154,56 @@ fn spot_falloff(cos_theta: f32, start: f32, total: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// ---- the environment (vpl_core::environment::Sky) ----
+
+fn mean3(c: vec3<f32>) -> f32 {
+    return (c.x + c.y + c.z) * (1.0 / 3.0);
+}
+
+// Radiance arriving from direction w: linear in height between zenith,
+// horizon and nadir.
+fn sky_radiance(i: u32, w: vec3<f32>) -> vec3<f32> {
+    let y = clamp(w.y, -1.0, 1.0);
+    let hor = lights[4u * i + 2u].xyz;
+    if (y >= 0.0) { return hor + (lights[4u * i + 1u].xyz - hor) * y; }
+    return hor + (lights[4u * i + 3u].xyz - hor) * (-y);
+}
+
+// The integrals of the channel mean over the upper and lower halves of y.
+fn sky_halves(i: u32) -> vec2<f32> {
+    let h = mean3(lights[4u * i + 2u].xyz);
+    return vec2<f32>(0.5 * (h + mean3(lights[4u * i + 1u].xyz)), 0.5 * (h + mean3(lights[4u * i + 3u].xyz)));
+}
+
+fn sky_pdf(i: u32, w: vec3<f32>) -> f32 {
+    let hv = sky_halves(i);
+    let total = TWO_PI * (hv.x + hv.y);
+    if (total > 0.0) { return mean3(sky_radiance(i, w)) / total; }
+    return 0.0;
+}
+
+// t in [0, 1] with density proportional to a + (b - a) t.
+fn linear_t(u: f32, a: f32, b: f32) -> f32 {
+    let den = a + sqrt(max(a * a + (b * b - a * a) * u, 0.0));
+    if (den > 0.0) { return clamp(u * (a + b) / den, 0.0, 1.0); }
+    return u;
+}
+
+fn sky_sample(i: u32, u0: f32, u1: f32) -> vec3<f32> {
+    let hv = sky_halves(i);
+    let p_up = hv.x / (hv.x + hv.y);
+    let h = mean3(lights[4u * i + 2u].xyz);
+    var y: f32;
+    if (u0 < p_up) {
+        y = linear_t(u0 / p_up, h, mean3(lights[4u * i + 1u].xyz));
+    } else {
+        y = -linear_t(min((u0 - p_up) / (1.0 - p_up), 1.0), h, mean3(lights[4u * i + 3u].xyz));
+    }
+    let s = sqrt(max(1.0 - y * y, 0.0));
+    let phi = TWO_PI * u1;
+    return vec3<f32>(s * cos(phi), y, s * sin(phi));
+}
+
 fn sample_light(x: vec3<f32>, u_sel: f32, u0: f32, u1: f32) -> LightSample {
     var ls: LightSample;
     ls.ok = false;
@@ -191,6 +248,20 @@ fn sample_light(x: vec3<f32>, u_sel: f32, u0: f32, u1: f32) -> LightSample {
         ls.dist = dist;
         ls.li = lights[4u * i + 2u].xyz;
         ls.pdf = dist2 / (cos_l * e2.w);
+        ls.delta = false;
+        return ls;
+    }
+    if (kind == 4u) {
+        let hv = sky_halves(i);
+        if (!(hv.x + hv.y > 0.0)) { return ls; }
+        let w = sky_sample(i, u0, u1);
+        let pdf = sky_pdf(i, w);
+        if (!(pdf > 0.0)) { return ls; }
+        ls.ok = true;
+        ls.wi = w;
+        ls.dist = NO_HIT;
+        ls.li = sky_radiance(i, w);
+        ls.pdf = pdf;
         ls.delta = false;
         return ls;
     }
@@ -306,7 +377,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         beta = beta * albedo;
         let origin = p + ng * params.eps;
         let h = closest_hit(origin, wi, NO_HIT);
-        if (h.prim == NONE) { break; }
+        if (h.prim == NONE) {
+            // Leaving the scene: the environment, weighted against NEE.
+            if (params.env != NONE) {
+                let le = sky_radiance(params.env, wi);
+                if (max(max(le.x, le.y), le.z) > 0.0) {
+                    l = l + beta * le * power_heuristic(pdf_bsdf, light_pmf[params.env] * sky_pdf(params.env, wi));
+                }
+            }
+            break;
+        }
         k = k + 1u;
         // The next vertex, as Scene::hit_at.
         let q = origin + wi * h.t;

@@ -12,14 +12,13 @@
 mod common;
 
 use common::context;
+use vpl_core::environment::Sky;
 use vpl_core::glam::Vec3;
-use vpl_core::{Purpose, RadiosityEstimator, SceneSetup, SurfacePoint, stream};
+use vpl_core::{Light, Purpose, RadiosityEstimator, Scene, SceneSetup, SurfacePoint, stream};
 use vpl_gpu::{Gpu, GpuRadiosity};
 use vpl_pathtrace::PathRadiosity;
 
-fn check(gpu: &Gpu, name: &str) {
-    let setup = SceneSetup::load(name).unwrap();
-    let scene = &setup.scene;
+fn check(gpu: &Gpu, name: &str, scene: &Scene) {
     let tris = &scene.geometry.triangles;
     let mut rng = stream(11, 0, Purpose::TEST, 0);
     let mut points: Vec<(SurfacePoint, u64)> = Vec::new();
@@ -50,6 +49,14 @@ fn gpu_radiosity_matches_the_cpu_estimator() {
     let gpu = Gpu::from_context(ctx);
     // Area lights (cornell, office), a sun (courtyard), a moving point or spot light (atrium).
     for name in ["cornell", "office", "courtyard", "atrium"] {
-        check(&gpu, name);
+        check(&gpu, name, &SceneSetup::load(name).unwrap().scene);
     }
+    // The courtyard under its sun and a sky gradient: light sampled toward
+    // the sky, and paths that leave the scene weighted against it.
+    let courtyard = SceneSetup::load("courtyard").unwrap().scene;
+    let mut lights = courtyard.extra_lights();
+    lights.push(Light::Environment {
+        sky: Sky { zenith: Vec3::new(0.2, 0.35, 0.8), horizon: Vec3::new(0.9, 0.9, 0.85), nadir: Vec3::splat(0.1) },
+    });
+    check(&gpu, "courtyard with a sky", &courtyard.with_lights(lights).unwrap());
 }

@@ -59,7 +59,10 @@ impl PathTracer {
         if self.max_depth == 0 || min_k > max_k {
             return Vec3::ZERO;
         }
-        let Some(hit) = scene.intersect(&ray) else { return Vec3::ZERO };
+        let Some(hit) = scene.intersect(&ray) else {
+            // The environment seen directly: a path without scattering vertices.
+            return if min_k == 0 { scene.environment_radiance(ray.d) } else { Vec3::ZERO };
+        };
         let mut l = Vec3::ZERO;
         if min_k == 0 {
             l += scene.emitted(&hit.point, -ray.d);
@@ -148,7 +151,16 @@ impl PathTracer {
             let pdf_bsdf = local.z * FRAC_1_PI;
             beta *= albedo;
             let origin = sp.p + sp.ng * eps;
-            let Some(hit) = scene.intersect(&Ray::new(origin, wi)) else { break };
+            let Some(hit) = scene.intersect(&Ray::new(origin, wi)) else {
+                // Leaving the scene: the environment ends a path with k + 1 vertices, weighted against NEE.
+                if k + 1 >= min_k {
+                    let le = scene.environment_radiance(wi);
+                    if le != Vec3::ZERO {
+                        l += beta * le * power_heuristic(pdf_bsdf, scene.environment_pdf(wi));
+                    }
+                }
+                break;
+            };
             k += 1;
             let next = hit.point;
             // Emission at the next vertex: a path with k scattering vertices, weighted against NEE.
@@ -230,7 +242,16 @@ impl PathTracer {
                 break;
             }
             let origin = at.offset_toward(s.w, eps);
-            let Some(hit) = scene.intersect(&Ray::new(origin, s.w)) else { break };
+            let Some(hit) = scene.intersect(&Ray::new(origin, s.w)) else {
+                if k + 1 >= min_k {
+                    let le = scene.environment_radiance(s.w);
+                    if le != Vec3::ZERO {
+                        let w = if s.delta { 1.0 } else { power_heuristic(s.pdf, scene.environment_pdf(s.w)) };
+                        l += beta * le * w;
+                    }
+                }
+                break;
+            };
             k += 1;
             let next = hit.point;
             if k >= min_k {

@@ -122,7 +122,14 @@ pub fn trace_eye(scene: &Scene, camera: &Camera, cfg: &ProgressiveConfig, pass: 
     let mut direct = Vec3::ZERO;
     let mut cone = RayCone { width: 0.0, spread };
     let mut s = 0u32;
-    while let Some(hit) = scene.intersect(&ray) {
+    loop {
+        let Some(hit) = scene.intersect(&ray) else {
+            // Leaving the scene (ES*L with the environment as L).
+            if cfg.techniques.direct && s < cfg.max_depth {
+                direct += beta * scene.environment_radiance(ray.d);
+            }
+            break;
+        };
         cone = cone.travel(hit.t);
         let sp = hit.point;
         let wo = -ray.d;

@@ -136,7 +136,8 @@ fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &m
                 let f = Light::spot_falloff(w.dot(*direction), *cos_falloff_start, *cos_total);
                 (f > 0.0).then(|| Emission { ray: Ray::new(*position, w), power: *intensity * (f * scale / (pdf * n)) })
             }
-            Light::Directional { .. } => {
+            // Parallel rays from a disk facing the sun or a drawn sky direction.
+            Light::Directional { .. } | Light::Environment { .. } => {
                 let e = scene.emit_from(light, (u_cell, rng.next_f32()), u_dir)?;
                 Some(Emission { ray: e.ray, power: e.beta * (scale / n) })
             }
@@ -177,7 +178,7 @@ pub fn trace_photons(
     let mut out = SourceResult { coverage: 1.0, ..Default::default() };
     let map = if cfg.projection_maps {
         let Some(y) = v.position(scene) else {
-            // The sun: parallel photons from a disk, no map.
+            // The sun or the sky: parallel photons from a disk, no map.
             return trace_with(scene, cfg, pass, v, None, first, n, bins, out);
         };
         let hemisphere = match v.emitter {

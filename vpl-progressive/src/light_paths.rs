@@ -59,14 +59,14 @@ impl PassVpl {
     }
 
     /// The VPL's position (a point light's, or the sampled point of an area
-    /// light; `None` for the sun).
+    /// light; `None` for the sun and the sky).
     pub fn position(&self, scene: &Scene) -> Option<Vec3> {
         match self.emitter {
             Emitter::Surface { y, .. } => Some(y.p),
             Emitter::Light { light, u_pos, .. } => match &scene.lights[light] {
                 vpl_core::Light::Area { triangle, .. } => Some(scene.geometry.triangles[*triangle as usize].sample_point(u_pos)),
                 vpl_core::Light::Point { position, .. } | vpl_core::Light::Spot { position, .. } => Some(*position),
-                vpl_core::Light::Directional { .. } => None,
+                vpl_core::Light::Directional { .. } | vpl_core::Light::Environment { .. } => None,
             },
         }
     }

@@ -47,7 +47,28 @@ pub fn render_gbuffer(scene: &Scene, camera: &Camera) -> GBuffer {
     });
     let c = camera.ray(w as f32 * 0.5, h as f32 * 0.5, (0.5, 0.5)).d;
     let r = camera.ray(w as f32 * 0.5 + 1.0, h as f32 * 0.5, (0.5, 0.5)).d;
-    GBuffer { width: w as u32, height: h as u32, samples, pixel_angle: c.dot(r).clamp(-1.0, 1.0).acos(), eye: camera.origin }
+    let mut g = GBuffer { width: w as u32, height: h as u32, samples, pixel_angle: c.dot(r).clamp(-1.0, 1.0).acos(), eye: camera.origin };
+    environment_at_misses(&mut g, scene, camera);
+    g
+}
+
+/// Gives the pixels of `g` whose camera ray (through the pixel centre, the
+/// lens centre) leaves the scene the environment's radiance along that ray
+/// as their emission: the sky seen directly. Nothing changes without an
+/// environment light.
+pub fn environment_at_misses(g: &mut GBuffer, scene: &Scene, camera: &Camera) {
+    if scene.environment.is_none() {
+        return;
+    }
+    let w = g.width.max(1) as usize;
+    g.samples.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, s) in row.iter_mut().enumerate() {
+            if !s.hit() {
+                let d = camera.ray(x as f32 + 0.5, y as f32 + 0.5, (0.5, 0.5)).d;
+                s.emitted = scene.environment_radiance(d);
+            }
+        }
+    });
 }
 
 /// What the G-buffer records of `hit`, seen along `ray`.

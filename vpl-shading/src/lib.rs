@@ -69,5 +69,5 @@ mod interleaved;
 pub use direct::direct_light;
 pub use exhaustive::ExhaustiveShader;
 pub use filter::CrossBilateral;
-pub use gbuffer::render_gbuffer;
+pub use gbuffer::{environment_at_misses, render_gbuffer};
 pub use interleaved::{CLASSES, InterleavedShader, ShadeTimings, TILE};

@@ -28,6 +28,97 @@ use std::process::{Command, ExitCode};
 use std::time::Instant;
 
 const SCENES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
+
+/// The real scenes of the gallery: (name, what it is, scene path from the
+/// repository root). Sponza and Munich name models kept outside the
+/// repository (`../shared/scenes`); the others are the test data's copies.
+const REAL_SCENES: [(&str, &str, &str); 10] = [
+    ("sponza", "Dabrovic Sponza (OBJ), a point light", "scenes/sponza-dabrovic.toml"),
+    ("munich", "Munich city blocks (OBJ, Z up), the sun", "scenes/city-munich.toml"),
+    ("munich-sky", "Munich city blocks, the sun and a sky", "scenes/city-munich-sky.toml"),
+    ("cornell-xml", "Mitsuba's Cornell box written as Mitsuba XML (analytic shapes)", "tests/data/cornell-box/cornell.xml"),
+    ("mcguire", "McGuire's Cornell box (OBJ + MTL)", "tests/data/mcguire/CornellBox-Original.obj"),
+    ("sundial", "Sundial (glTF binary, KHR_lights_punctual sun)", "vpl-core/tests/data/gltf/Sundial-KHR_lights_punctual/Sundial.glb"),
+    ("mitsuba-cbox", "Mitsuba's cbox.xml (spectral reflectances and light)", "vpl-core/tests/data/mitsuba/cbox-mitsuba-data/cbox.xml"),
+    ("mitsuba-tutorials", "Mitsuba tutorials' box: a mirror and a glass sphere", "vpl-core/tests/data/mitsuba/cbox-tutorials/cbox.xml"),
+    ("veach-mis", "Veach's MIS scene (Mitsuba data)", "vpl-core/tests/data/mitsuba/veach-mis-mitsuba-data/veach_mis.xml"),
+    ("veach-mis-bitterli", "Veach's MIS scene (Bitterli's resources)", "vpl-core/tests/data/mitsuba/veach-mis-bitterli/scene.xml"),
+];
+
+/// Renders each of [`REAL_SCENES`] by the path tracer and by SMC into
+/// `dir`, and returns the Markdown table that sets them side by side.
+/// The path tracer draws the materials as SMC does (`--materials diffuse`);
+/// where that drops layers, the scene as the file gives it is shown too.
+/// A scene whose model is not there is listed as skipped.
+fn real_scene_gallery(vpl: &Path, dir: &Path, profile: &Profile) -> Result<String, String> {
+    let mut md = format!(
+        "### Real scenes\n\nThe scenes of `../shared/scenes` (through the test data's copies, or the scene files of `scenes/`), at their own \
+         cameras and sizes: the path tracer (full light, max-depth 5, {} spp) and SMC (2048 VPLs, one frame, ray-traced \
+         visibility), side by side. Both draw each material by its albedo (the VPL pipeline can draw nothing else; the path tracer \
+         with `--materials diffuse`); where that drops a glossy or transparent layer, a third picture is the path tracer on the \
+         materials as the file gives them.\n\n| scene | path tracer | SMC | path tracer, materials as given |\n| --- | --- | --- | --- |\n",
+        profile.gallery_spp
+    );
+    for (i, (name, what, path)) in REAL_SCENES.iter().enumerate() {
+        eprintln!("xtask: [scenes, real {}/{}] {name}", i + 1, REAL_SCENES.len());
+        let spp = profile.gallery_spp.to_string();
+        let pt = dir.join(format!("{name}_path.exr"));
+        let o = Command::new(vpl)
+            .current_dir(root())
+            .args(["render", "--scene", path, "--mode", "full", "--spp", &spp, "--materials", "diffuse", "--quiet", "--out"])
+            .arg(&pt)
+            .output()
+            .map_err(|e| format!("vpl render {name}: {e}"))?;
+        let err = String::from_utf8_lossy(&o.stderr);
+        if !o.status.success() {
+            let why = err.lines().find(|l| l.starts_with("vpl: error:")).unwrap_or("failed").trim_start_matches("vpl: error: ");
+            if why.contains("cannot read") || why.contains("is not there") || why.contains("No such file") {
+                md.push_str(&format!("| {what} (`{path}`) | skipped: {why} | | |\n"));
+                continue;
+            }
+            return Err(format!("vpl render {name}: {why}"));
+        }
+        let layered = err.contains("layered material");
+        let smc = dir.join(format!("{name}_smc.exr"));
+        let mut c = Command::new(vpl);
+        c.current_dir(root())
+            .args([
+                "render",
+                "--scene",
+                path,
+                "--method",
+                "vpl",
+                "--sampler",
+                "smc",
+                "--vpls",
+                "2048",
+                "--visibility",
+                "raytrace",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&smc)
+            .stderr(std::process::Stdio::null());
+        run(c, &format!("vpl render {name} (SMC)"))?;
+        let as_given = if layered {
+            let out = dir.join(format!("{name}_path_as_given.exr"));
+            let mut c = Command::new(vpl);
+            c.current_dir(root())
+                .args(["render", "--scene", path, "--mode", "full", "--spp", &spp, "--quiet", "--out"])
+                .arg(&out)
+                .stderr(std::process::Stdio::null());
+            run(c, &format!("vpl render {name} (materials as given)"))?;
+            format!("![{name} as given](scenes/{name}_path_as_given.png)")
+        } else {
+            "(no layered materials)".to_string()
+        };
+        md.push_str(&format!(
+            "| {what} (`{path}`) | ![{name}](scenes/{name}_path.png) | ![{name} SMC](scenes/{name}_smc.png) | {as_given} |\n"
+        ));
+    }
+    md.push('\n');
+    Ok(md)
+}
 const JOBS: [&str; 9] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "fig8", "fig10", "progressive"];
 
 fn root() -> PathBuf {
@@ -346,6 +437,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             md.push_str(&format!("![{s}](scenes/{s}.png) "));
         }
         md.push_str("\n\n");
+        md.push_str(&real_scene_gallery(&vpl, &dir, profile)?);
         save_section("scenes", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     if job("references") {

@@ -96,6 +96,24 @@ enum ModeArg {
     Indirect,
 }
 
+/// Which materials a render draws (see [`vpl_core::MaterialPolicy`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum MaterialsArg {
+    /// The scene's materials, layers included (path tracer, progressive renderer).
+    AsIs,
+    /// Each material's albedo only, as the VPL pipeline draws it: the fair reference for a VPL render.
+    Diffuse,
+}
+
+impl MaterialsArg {
+    fn policy(self) -> vpl_core::MaterialPolicy {
+        match self {
+            MaterialsArg::AsIs => vpl_core::MaterialPolicy::AsIs,
+            MaterialsArg::Diffuse => vpl_core::MaterialPolicy::Diffuse,
+        }
+    }
+}
+
 /// What to render: scene, frame, path tracer settings, threads.
 #[derive(clap::Args)]
 struct SceneArgs {
@@ -494,6 +512,9 @@ fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Sce
     let (sc, mut camera) = setup.frame(frame).map_err(|e| e.to_string())?;
     if let Some(Size(w, h)) = size {
         camera = camera.with_resolution((w, h)).map_err(|e| e.to_string())?;
+    }
+    if let Some(w) = vpl_core::view::check_view(&sc, &camera) {
+        eprintln!("vpl: warning: {w}");
     }
     Ok((sc, camera))
 }

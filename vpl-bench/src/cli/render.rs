@@ -16,6 +16,11 @@ pub(super) struct Args {
     /// Samples per pixel (path).
     #[arg(long, default_value_t = 64)]
     spp: u32,
+    /// Which materials to draw: as-is (default for path and progressive) or diffuse (each material's
+    /// albedo only, which is all the VPL pipeline can draw: the fair reference for a VPL render).
+    /// --method vpl always draws diffuse and says so when the scene has layered materials.
+    #[arg(long, value_enum)]
+    materials: Option<MaterialsArg>,
     #[command(flatten)]
     v: VplArgs,
     #[command(flatten)]
@@ -41,6 +46,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         method,
         mode,
         spp,
+        materials,
         v,
         p,
         out,
@@ -48,6 +54,10 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         exposure,
         quiet,
     } = args;
+    if method == Method::Vpl && materials == Some(MaterialsArg::AsIs) {
+        return Err("--materials as-is: the VPL pipeline draws each material's albedo only (use --method path or progressive)".into());
+    }
+    let policy = materials.map_or(vpl_core::MaterialPolicy::AsIs, MaterialsArg::policy);
     if method == Method::Progressive && mode != ModeArg::Full {
         return Err("--mode: the progressive renderer renders full images (select path classes with --techniques)".into());
     }
@@ -68,6 +78,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if method == Method::Progressive {
         return render_progressive(
             &scene,
+            policy,
             frame,
             size,
             seed,
@@ -106,6 +117,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         );
     }
     let (sc, camera) = load_frame(&scene, frame, size)?;
+    let sc = with_policy(sc, policy, "the path tracer (--materials diffuse)");
     let estimate = vpl_render::MemoryEstimate::path_tracer(&sc, camera.resolution);
     check_memory(&estimate, memory_limit)?;
     let pt = tracer(max_depth, mode, clamp, vpls, &sc, &camera);
@@ -171,6 +183,7 @@ fn render_vpl(
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
     let (sc, camera) = load_frame(scene, frame, size)?;
+    let sc = with_policy(sc, vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)");
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera);
     let spec = pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?;
@@ -228,6 +241,7 @@ fn render_vpl(
 #[allow(clippy::too_many_arguments)]
 fn render_progressive(
     scene: &str,
+    policy: vpl_core::MaterialPolicy,
     frame: u32,
     size: Option<Size>,
     seed: u64,
@@ -272,6 +286,7 @@ fn render_progressive(
         CullingArg::Off => Culling::Off,
     };
     let (sc, mut camera) = load_frame(scene, frame, size)?;
+    let sc = with_policy(sc, policy, "the progressive renderer (--materials diffuse)");
     let estimate = vpl_render::MemoryEstimate::progressive(&sc, camera.resolution, p.caustic_paths, p.vpl_paths, max_depth);
     check_memory(&estimate, memory_limit)?;
     if p.lens_radius.is_some() || p.focus_distance.is_some() {
@@ -370,4 +385,15 @@ fn render_progressive(
         );
     }
     Ok(())
+}
+
+/// `sc` drawn by `policy`, with a warning naming what `who` draws differently.
+fn with_policy(sc: vpl_core::Scene, policy: vpl_core::MaterialPolicy, who: &str) -> vpl_core::Scene {
+    match sc.material_policy_note(policy, who) {
+        Some(note) => {
+            eprintln!("vpl: warning: {note}");
+            sc.with_material_policy(policy)
+        }
+        None => sc,
+    }
 }

@@ -71,6 +71,15 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
     // The clamp of the whole run, from the view of its first frame (a moving camera keeps it).
     let first = setup.camera_at_frame(range.start).map_err(|e| e.to_string())?.with_resolution(res).map_err(|e| e.to_string())?;
+    if let Some(note) = setup
+        .scene
+        .material_policy_note(vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)")
+    {
+        eprintln!("vpl: warning: {note}");
+    }
+    if let Some(w) = vpl_core::view::check_view(&setup.scene, &first) {
+        eprintln!("vpl: warning: frame {}: {w}", range.start);
+    }
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &setup.scene, &first);
     let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);

@@ -587,6 +587,8 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
     let start = Instant::now();
     let setup = row.setup()?;
     let (scene, camera) = setup.frame(frame)?;
+    // The truth draws the materials as the VPL methods it judges do.
+    let scene = scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
     let camera = camera.with_resolution(spec.size)?;
     let pt = PathTracer::new(spec.max_depth, Mode::Indirect);
     // Rays through the pixel centres: the one point a G-buffer shades per

@@ -26,7 +26,8 @@
 //!   of the shape's material; `point` (`position` or `to_world`), `spot`
 //!   (`cutoff_angle`, `beam_width`; the falloff is the toolkit's smoothstep
 //!   between them, where Mitsuba's is linear in angle) and `directional`
-//!   (`direction` or `to_world`) as lights, with `intensity`/`irradiance`.
+//!   (`direction` or `to_world`) as lights, with `intensity`/`irradiance`;
+//!   `constant` (`radiance`) as the environment light.
 //! - **Sensor.** The first `perspective` or `thinlens` sensor: `to_world`,
 //!   `fov` with `fov_axis` (`x`, `y`, `smaller`, `larger`, `diagonal`) or
 //!   `focal_length` (of a 35 mm film's diagonal), `aperture_radius` and
@@ -36,8 +37,8 @@
 //!   each method sets its own depth), `<sampler>`, `<rfilter>`, and the
 //!   film's and sensor's other parameters (listed in the warnings).
 //!
-//! Anything else (other shapes, BSDFs, emitters such as `constant` and
-//! `envmap`, textures, media, `shapegroup`/`instance`) is an error that
+//! Anything else (other shapes, BSDFs, emitters such as `envmap` and
+//! `sky`, textures, media, `shapegroup`/`instance`) is an error that
 //! names the element, its file and line.
 
 mod bsdf;
@@ -352,11 +353,15 @@ impl<'a> Ctx<'a> {
                 let irradiance = self.colour(e, "irradiance", Vec3::ONE, SpectrumKind::Emission, TexParam::No)?;
                 LightSpec::Directional { direction: d.into(), irradiance: irradiance.into() }
             }
+            "constant" => {
+                let radiance = self.colour(e, "radiance", Vec3::ONE, SpectrumKind::Emission, TexParam::No)?;
+                LightSpec::Environment { radiance: radiance.into(), horizon: None, ground: None }
+            }
             other => {
                 return Err(self.doc.err(
                     e.at,
                     format!(
-                        "<emitter type=\"{other}\"> is not supported (area, point, spot and directional are; constant, envmap and sky lights are not yet)"
+                        "<emitter type=\"{other}\"> is not supported (area, point, spot, directional and constant are; envmap and sky lights are not)"
                     ),
                 ));
             }

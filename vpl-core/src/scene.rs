@@ -241,7 +241,7 @@ impl Scene {
     }
 
     /// This scene drawn by `policy`: itself, or a copy whose materials keep
-    /// only their albedo and emission ([`MaterialPolicy::Diffuse`]; the
+    /// only their albedo and emission ([`crate::material::MaterialPolicy::Diffuse`]; the
     /// geometry is shared).
     pub fn with_material_policy(&self, policy: crate::material::MaterialPolicy) -> Scene {
         let mut s = self.clone();

@@ -1,5 +1,5 @@
 //! The `vpl` command line as a library: [`run`] takes a sampler
-//! [`Registry`](vpl_sampling::Registry) and the arguments, so a user's own
+//! [`Registry`] and the arguments, so a user's own
 //! binary of a few lines gets every subcommand (`render`, `sequence`,
 //! `table1`, `bench-vpl`, …) with its own samplers registered:
 //!

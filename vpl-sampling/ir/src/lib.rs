@@ -13,7 +13,7 @@
 //! the number of VPLs is fixed in advance. `N` is the largest path count whose
 //! VPLs fit the budget I; a path that leaves the scene (or reaches a surface
 //! from its unlit side, or one that reflects nothing) stores nothing more, so
-//! IR may store fewer than I VPLs. [`InstantRadiosity::report`] counts them.
+//! IR may store fewer than I VPLs. [`InstantRadiosity::stats`] counts them.
 //!
 //! Light path i draws its numbers from stream (seed, LIGHT_PATH, i), or from
 //! point i of a Cranley–Patterson-rotated Halton sequence: the frame index is

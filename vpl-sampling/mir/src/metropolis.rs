@@ -15,7 +15,7 @@ use vpl_core::{Frame, Purpose, Scene, Stats, Vpl, VplSampler, VplSet, stream};
 pub struct MirStats {
     /// VPLs stored.
     pub stored: usize,
-    /// The normalisation b̂ = E[f] from the bootstrap phase.
+    /// The normalisation b̂ = E\[f\] from the bootstrap phase.
     pub b: f64,
     /// Bootstrap paths that carried a VPL with f > 0.
     pub bootstrap_useful: usize,

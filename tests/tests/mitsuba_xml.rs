@@ -10,10 +10,12 @@ fn mitsuba_data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-core/tests/data/mitsuba").join(p)
 }
 
-/// Mitsuba's Cornell box (one-sided diffuse walls, its RGB fragments) and
-/// Bitterli's Veach MIS scene (two-sided, three emitting spheres, conductor
-/// cubes): full light at depth 5 through each scene's own camera at a small
-/// size. The VPL image mean over 8 seeds (1024 VPLs each, ray-traced,
+/// Every Mitsuba sample: the Cornell box with spectra and with its RGB
+/// fragments (one-sided diffuse walls), the tutorials' box (its mirror and
+/// glass spheres drawn by their black albedo under the diffuse policy),
+/// and Veach's MIS scene twice (five and three emitting spheres, glossy
+/// plates, two-sided conductor cubes): full light at depth 5 through each
+/// scene's own camera at a small size. The VPL image mean over 8 seeds (1024 VPLs each, ray-traced,
 /// exhaustive) must lie within 4 standard errors of the path tracer's (128
 /// paths through each pixel centre, the point the G-buffer shades), the
 /// error combining the spread over seeds (7 degrees of freedom:
@@ -21,8 +23,13 @@ fn mitsuba_data(p: &str) -> PathBuf {
 /// the mean for rounding.
 #[test]
 fn mitsuba_scenes_render_with_their_light_as_the_path_tracer_does() {
-    let scenes =
-        [("cbox-rgb", "cbox-mitsuba-data/cbox-rgb.xml", (32, 32)), ("veach-mis-bitterli", "veach-mis-bitterli/scene.xml", (48, 27))];
+    let scenes = [
+        ("cbox", "cbox-mitsuba-data/cbox.xml", (32, 32)),
+        ("cbox-rgb", "cbox-mitsuba-data/cbox-rgb.xml", (32, 32)),
+        ("cbox-tutorials", "cbox-tutorials/cbox.xml", (32, 32)),
+        ("veach-mis", "veach-mis-mitsuba-data/veach_mis.xml", (48, 32)),
+        ("veach-mis-bitterli", "veach-mis-bitterli/scene.xml", (48, 27)),
+    ];
     for (name, path, size) in scenes {
         let setup = SceneSetup::load(mitsuba_data(path).to_str().unwrap()).unwrap();
         // The VPL pipeline reads the albedo only; the glossy conductor

@@ -67,13 +67,9 @@ impl Scene {
                 (Ray::new(*position, d), *intensity * (f / pdf))
             }
             Light::Directional { direction, irradiance } => {
-                let (lo, hi) = self.geometry.bounds;
                 let r = self.radius();
-                let f = LocalFrame::from_normal(*direction);
-                let q = concentric_disk(u_pos.0, u_pos.1) * r;
-                let o = 0.5 * (lo + hi) - *direction * (1.01 * r) + f.s * q.x + f.t * q.y;
                 // E over a disk of area π r².
-                (Ray::new(o, *direction), *irradiance * (PI * r * r))
+                (self.parallel_ray(*direction, u_pos), *irradiance * (PI * r * r))
             }
             Light::Environment { sky } => {
                 // ω toward the sky; the light travels along −ω.
@@ -81,20 +77,26 @@ impl Scene {
                 if !(pdf > 0.0) {
                     return None;
                 }
-                let (lo, hi) = self.geometry.bounds;
                 let r = self.radius();
-                let d = -w;
-                let f = LocalFrame::from_normal(d);
-                let q = concentric_disk(u_pos.0, u_pos.1) * r;
-                let o = 0.5 * (lo + hi) - d * (1.01 * r) + f.s * q.x + f.t * q.y;
                 // L(ω)·cos over (p(ω) · 1/(π r²)): the radiance through a disk facing ω.
-                (Ray::new(o, d), sky.radiance(w) * (PI * r * r / pdf))
+                (self.parallel_ray(-w, u_pos), sky.radiance(w) * (PI * r * r / pdf))
             }
         };
         if !(beta.max_element() > 0.0) {
             return None;
         }
         Some(EmittedRay { ray, beta, light: i })
+    }
+
+    /// A ray along `d` from the point `u_pos` of the disk of the scene's
+    /// bounding radius that faces `d` from outside the scene: the rays of
+    /// the sun and of a sky direction.
+    fn parallel_ray(&self, d: Vec3, u_pos: (f32, f32)) -> Ray {
+        let (lo, hi) = self.geometry.bounds;
+        let r = self.radius();
+        let f = LocalFrame::from_normal(d);
+        let q = concentric_disk(u_pos.0, u_pos.1) * r;
+        Ray::new(0.5 * (lo + hi) - d * (1.01 * r) + f.s * q.x + f.t * q.y, d)
     }
 }
 

@@ -195,10 +195,16 @@ impl Scene {
         for (i, l) in extra_lights.iter().enumerate() {
             crate::validate::light(l, i)?;
         }
-        if extra_lights.iter().filter(|l| matches!(l, Light::Environment { .. })).count() > 1 {
+        let skies: Vec<usize> = extra_lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| matches!(l, Light::Environment { .. }))
+            .map(|(i, _)| lights.len() + i)
+            .collect();
+        if skies.len() > 1 {
             return Err(CoreError::Invalid(format!("{}: a scene has at most one environment light", self.name)));
         }
-        let environment = extra_lights.iter().position(|l| matches!(l, Light::Environment { .. })).map(|i| lights.len() + i);
+        let environment = skies.first().copied();
         lights.extend(extra_lights);
         let radius = self.radius();
         let powers: Vec<f32> = lights

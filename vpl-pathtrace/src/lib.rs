@@ -44,5 +44,7 @@ pub mod render;
 
 pub use integrator::PathTracer;
 pub use radiosity::PathRadiosity;
-pub use render::{Accumulator, Footprint, RenderError, RenderOutput, RenderSettings, TrackedPixel, pixel, render, track, track_with};
+pub use render::{
+    Accumulator, Footprint, RenderError, RenderOutput, RenderSettings, TrackedPixel, pixel, render, render_cancellable, track, track_with,
+};
 pub use vpl_core::Mode;

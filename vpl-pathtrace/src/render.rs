@@ -3,7 +3,7 @@
 
 use crate::integrator::PathTracer;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, Image, Purpose, Scene, stream};
@@ -45,6 +45,9 @@ pub enum RenderError {
     /// load-time checks let through, or a defect): the image is refused.
     #[error("path tracing produced {0} non-finite pixel(s)")]
     NonFinite(usize),
+    /// The render was cancelled before it finished ([`render_cancellable`]).
+    #[error("the render was cancelled")]
+    Cancelled,
     /// A thread pool could not be built.
     #[error("cannot start {0} threads: {1}")]
     Threads(usize, String),
@@ -58,6 +61,21 @@ pub fn render(
     pt: &PathTracer,
     s: RenderSettings,
     progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<RenderOutput, RenderError> {
+    render_cancellable(scene, camera, pt, s, progress, &AtomicBool::new(false))
+}
+
+/// [`render`] that stops early once `cancel` is set (from another thread:
+/// a Ctrl-C handler, a viewer's camera move), checked before every pixel,
+/// and then returns [`RenderError::Cancelled`]. The image of an uncancelled
+/// render is the same bits as [`render`]'s.
+pub fn render_cancellable(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    s: RenderSettings,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
 ) -> Result<RenderOutput, RenderError> {
     if s.spp == 0 {
         return Err(RenderError::ZeroSpp);
@@ -76,6 +94,9 @@ pub fn render(
             let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
                 for x in x0..x1 {
+                    if cancel.load(Ordering::Relaxed) {
+                        return out;
+                    }
                     out.push(pixel(scene, camera, pt, x, y, s));
                 }
             }
@@ -84,6 +105,9 @@ pub fn render(
             out
         })
         .collect();
+    if cancel.load(Ordering::Relaxed) {
+        return Err(RenderError::Cancelled);
+    }
     let mut image = Image::new(w, h);
     let mut stderr = Image::new(w, h);
     for (&(tx, ty), px) in tiles.iter().zip(results) {
@@ -248,4 +272,46 @@ pub fn track_with(
             TrackedPixel { pixel, mean: acc.mean(), stderr: acc.stderr(), samples: acc.count() }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vpl_core::{Mode, SceneSetup};
+
+    /// An uncancelled render is [`render`]'s image bit for bit; a render
+    /// cancelled before it starts, or by its own progress callback after the
+    /// first tile, stops with [`RenderError::Cancelled`] without finishing
+    /// its pixels.
+    #[test]
+    fn cancelling_stops_a_render_and_not_cancelling_changes_nothing() {
+        let setup = SceneSetup::load("cornell").unwrap();
+        let camera = setup.camera.with_resolution((48, 32)).unwrap();
+        let pt = PathTracer::new(5, Mode::Full);
+        let s = RenderSettings { spp: 4, seed: 3, frame: 0 };
+        let plain = render(&setup.scene, &camera, &pt, s, &|_, _| {}).unwrap();
+        let flag = AtomicBool::new(false);
+        let same = render_cancellable(&setup.scene, &camera, &pt, s, &|_, _| {}, &flag).unwrap();
+        assert_eq!(plain.image, same.image);
+        assert_eq!(plain.stderr, same.stderr);
+        flag.store(true, Ordering::Relaxed);
+        assert!(matches!(render_cancellable(&setup.scene, &camera, &pt, s, &|_, _| {}, &flag), Err(RenderError::Cancelled)));
+        let flag = AtomicBool::new(false);
+        let seen = AtomicU64::new(0);
+        let r = render_cancellable(
+            &setup.scene,
+            &camera,
+            &pt,
+            RenderSettings { spp: 64, ..s },
+            &|done, _| {
+                seen.fetch_max(done, Ordering::Relaxed);
+                flag.store(true, Ordering::Relaxed);
+            },
+            &flag,
+        );
+        assert!(matches!(r, Err(RenderError::Cancelled)));
+        // Six 16×16 tiles: after the first tile ends, each thread finishes at
+        // most the pixel it is on.
+        assert!(seen.load(Ordering::Relaxed) < 48 * 32, "{}", seen.load(Ordering::Relaxed));
+    }
 }

@@ -4,8 +4,8 @@
 //! and renderer from Python, with NumPy arrays, and VPL samplers written in
 //! Python that plug into the same renderer. Built with PyO3 and maturin as
 //! one abi3 wheel for CPython ≥ 3.9, on the library crates only
-//! (`vpl-render`, `vpl-sampling`, `vpl-pathtrace`, and `vpl-gpu` behind the
-//! default feature `gpu`).
+//! (`vpl-render`, `vpl-sampling`, `vpl-pathtrace`, `vpl-progressive`, and
+//! `vpl-gpu` behind the default feature `gpu`).
 //!
 //! ```python
 //! import vpl
@@ -28,6 +28,7 @@ mod interrupt;
 mod metrics;
 mod pathtrace;
 mod progress;
+mod progressive;
 mod renderer;
 mod sampler;
 mod scene;
@@ -62,6 +63,17 @@ fn samplers(py: Python<'_>) -> PyResult<Vec<Bound<'_, pyo3::types::PyDict>>> {
         .collect()
 }
 
+/// The SMC paper's eight tracked pixels of a `width`×`height` image, as
+/// `vpl sequence` and Table 1 follow them: the centre, a point low in the
+/// image, and six around the centre.
+#[pyfunction]
+fn default_tracked_pixels(width: u32, height: u32) -> PyResult<Vec<(u32, u32)>> {
+    if width == 0 || height == 0 {
+        return Err(error::vpl_err("the image must be at least 1x1"));
+    }
+    Ok(vpl_render::default_tracked_pixels(width, height))
+}
+
 /// The native module `vpl._vpl`; the package `vpl` re-exports it.
 #[pymodule]
 fn _vpl(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -73,6 +85,8 @@ fn _vpl(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(samplers, m)?)?;
     m.add_function(wrap_pyfunction!(pathtrace::render_path, m)?)?;
     m.add_function(wrap_pyfunction!(pathtrace::track, m)?)?;
+    m.add_function(wrap_pyfunction!(progressive::render_progressive, m)?)?;
+    m.add_function(wrap_pyfunction!(default_tracked_pixels, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::rel_mse, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::rmse, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::temporal_error, m)?)?;

@@ -12,7 +12,7 @@ use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, render_cancellable, t
 use vpl_render::vpl_core::{MaterialPolicy, Mode};
 
 /// An image and its per-pixel standard errors, (height, width, 3) each.
-type ImageAndError<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray3<f32>>);
+pub(crate) type ImageAndError<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray3<f32>>);
 
 /// Means and standard errors of tracked pixels, (n, 3) each.
 type MeansAndErrors<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>);

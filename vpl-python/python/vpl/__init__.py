@@ -25,14 +25,17 @@ from ._vpl import (
     VplError,
     __version__,
     compare,
+    default_tracked_pixels,
     rel_mse,
     render_path,
+    render_progressive,
     rmse,
     samplers,
     temporal_error,
     tone_mapped_luminance,
     track,
 )
+from ._experiments import compare_samplers, sequence
 
 __all__ = [
     "FrameInfo",
@@ -41,10 +44,14 @@ __all__ = [
     "VplError",
     "__version__",
     "compare",
+    "compare_samplers",
+    "default_tracked_pixels",
     "rel_mse",
     "render_path",
+    "render_progressive",
     "rmse",
     "samplers",
+    "sequence",
     "temporal_error",
     "tone_mapped_luminance",
     "track",

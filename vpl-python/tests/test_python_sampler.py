@@ -78,8 +78,37 @@ def test_moved_slots_follow_what_the_sampler_returns(cornell):
     assert len(v) == 40 and v["moved"].all() and np.array_equal(v["slot"], np.arange(40))
     r.frame(1)
     v = r.vpls()
-    assert not v["moved"].any() and r.stats()["rebuilt"] == 0
+    assert not v["moved"].any() and r.stats()["moved"] == 0
     assert np.allclose(v["flux"], 0.02)
+
+
+class Marked:
+    """Fixed points; slot 0 declared moved every frame, slot 1 moved
+    without saying so from the third frame on."""
+
+    def __init__(self, scene):
+        self.pts = scene.sample_area(4, seed=2)
+        self.calls = 0
+
+    def next_frame(self, frame):
+        self.calls += 1
+        p = self.pts["position"].copy()
+        if self.calls >= 3:
+            p[1] += 0.01
+        moved = np.array([True, False, False, False])
+        return p, self.pts["normal"], np.full((4, 3), 0.01, dtype=np.float32), moved
+
+
+def test_moved_flags_force_a_move_and_guard_against_an_unmarked_one(cornell):
+    r = vpl.Renderer(cornell, sampler=Marked(cornell), vpls=4, size=(8, 8), mode="indirect")
+    r.frame(0)
+    r.frame(1)
+    v = r.vpls()
+    # Slot 0 moved where it stood: a new VPL (its shadow map is made anew).
+    assert v["moved"].tolist() == [True, False, False, False] and r.stats()["moved"] == 1
+    assert v["id"][0] != v["id"][1]
+    with pytest.raises(vpl.VplError, match="VPL 1 is marked not moved"):
+        r.frame(2)
 
 
 class Broken:

@@ -68,7 +68,11 @@ class PythonSampler(Protocol):
 
     def next_frame(
         self, frame: FrameInfo
-    ) -> Union[Tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike], Dict[str, npt.ArrayLike]]: ...
+    ) -> Union[
+        Tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
+        Tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
+        Dict[str, npt.ArrayLike],
+    ]: ...
 
 class Renderer:
     """A VPL renderer over one scene, keeping its state from frame to frame."""

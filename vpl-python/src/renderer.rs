@@ -3,7 +3,6 @@
 use crate::arrays::{image, vectors};
 use crate::error::vpl_err;
 use crate::interrupt::interruptible;
-use crate::pathtrace::mode;
 use crate::sampler::{Hooks, PythonSampler, Recorded, lock};
 use crate::scene::PyScene;
 use numpy::{IntoPyArray, PyArray3};
@@ -131,7 +130,7 @@ impl PyRenderer {
                 p.insert(&key.replace('_', "-"), param_text(&v)?).map_err(vpl_err)?;
             }
         }
-        let mode = mode_checked(mode)?;
+        let mode = crate::pathtrace::mode(mode)?;
         let budget = Budget { vpls, max_depth };
         if vpls == 0 {
             return Err(vpl_err("the VPL budget must be at least 1"));
@@ -324,8 +323,4 @@ impl PyRenderer {
     fn __repr__(&self) -> String {
         format!("Renderer(sampler='{}', backend='{}')", self.sampler, self.backend)
     }
-}
-
-fn mode_checked(name: &str) -> PyResult<vpl_render::vpl_core::Mode> {
-    mode(name)
 }

@@ -64,15 +64,8 @@ pub fn render_path<'py>(
     }
     let pt = PathTracer::new(max_depth, self::mode(mode)?);
     let camera = scene.camera_at(size)?;
-    let policy = policy(materials)?;
-    let diffuse;
-    let sc = match policy {
-        MaterialPolicy::AsIs => scene.scene.as_ref(),
-        MaterialPolicy::Diffuse => {
-            diffuse = scene.scene.with_material_policy(policy);
-            &diffuse
-        }
-    };
+    // The geometry is shared: the copy is of the materials and lights.
+    let sc = &scene.scene.with_material_policy(policy(materials)?);
     let (w, h) = camera.resolution;
     let settings = RenderSettings { spp, seed, frame: scene.frame as u64 };
     let done = AtomicU64::new(0);

@@ -241,7 +241,52 @@ pub fn track_with(
     frame: u64,
     footprint: Footprint,
 ) -> Vec<TrackedPixel> {
+    tracked(scene, camera, pt, pixels, spp, seed, frame, footprint, &|_, _| {}, &AtomicBool::new(false))
+}
+
+/// [`track_with`] that reports `progress(batches done, batches)` as batches
+/// of [`TRACK_BATCH`] samples end, and stops early once `cancel` is set
+/// (from another thread), checked before every batch, and then returns
+/// [`RenderError::Cancelled`]. An uncancelled run is [`track_with`]'s
+/// result bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn track_cancellable(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    pixels: &[(u32, u32)],
+    spp: u32,
+    seed: u64,
+    frame: u64,
+    footprint: Footprint,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Vec<TrackedPixel>, RenderError> {
+    let out = tracked(scene, camera, pt, pixels, spp, seed, frame, footprint, progress, cancel);
+    if cancel.load(Ordering::Relaxed) {
+        return Err(RenderError::Cancelled);
+    }
+    Ok(out)
+}
+
+/// The batches of [`track_cancellable`]; those begun after `cancel` is set
+/// take no samples.
+#[allow(clippy::too_many_arguments)]
+fn tracked(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    pixels: &[(u32, u32)],
+    spp: u32,
+    seed: u64,
+    frame: u64,
+    footprint: Footprint,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Vec<TrackedPixel> {
     let batches = spp.div_ceil(TRACK_BATCH);
+    let total = pixels.len() as u64 * batches as u64;
+    let done = AtomicU64::new(0);
     let items: Vec<(usize, u32)> = (0..pixels.len()).flat_map(|p| (0..batches).map(move |b| (p, b))).collect();
     let accs: Vec<Accumulator> = items
         .par_iter()
@@ -250,6 +295,9 @@ pub fn track_with(
             let n = TRACK_BATCH.min(spp - b * TRACK_BATCH);
             let mut rng = stream(seed, frame, Purpose::TRACKED, ((p as u64) << 32) | b as u64);
             let mut acc = Accumulator::default();
+            if cancel.load(Ordering::Relaxed) {
+                return acc;
+            }
             for _ in 0..n {
                 let (u, v) = match footprint {
                     Footprint::Box => rng.next_2d(),
@@ -258,6 +306,7 @@ pub fn track_with(
                 let lens = rng.next_2d();
                 acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
             }
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             acc
         })
         .collect();
@@ -313,5 +362,38 @@ mod tests {
         // Six 16×16 tiles: after the first tile ends, each thread finishes at
         // most the pixel it is on.
         assert!(seen.load(Ordering::Relaxed) < 48 * 32, "{}", seen.load(Ordering::Relaxed));
+    }
+
+    /// An uncancelled [`track_cancellable`] is [`track_with`]'s result bit
+    /// for bit; one whose flag is set before it starts takes no samples and
+    /// answers [`RenderError::Cancelled`].
+    #[test]
+    fn cancelling_stops_tracking_and_not_cancelling_changes_nothing() {
+        let setup = SceneSetup::load("cornell").unwrap();
+        let camera = setup.camera.with_resolution((48, 32)).unwrap();
+        let pt = PathTracer::new(5, Mode::Full);
+        let pixels = [(3, 4), (20, 16), (47, 31)];
+        let plain = track_with(&setup.scene, &camera, &pt, &pixels, 5000, 7, 0, Footprint::Box);
+        let flag = AtomicBool::new(false);
+        let seen = AtomicU64::new(0);
+        let same = track_cancellable(
+            &setup.scene,
+            &camera,
+            &pt,
+            &pixels,
+            5000,
+            7,
+            0,
+            Footprint::Box,
+            &|d, _| _ = seen.fetch_max(d, Ordering::Relaxed),
+            &flag,
+        )
+        .unwrap();
+        assert_eq!(plain, same);
+        // Two batches per pixel (5000 = 4096 + 904).
+        assert_eq!(seen.load(Ordering::Relaxed), 6);
+        flag.store(true, Ordering::Relaxed);
+        let r = track_cancellable(&setup.scene, &camera, &pt, &pixels, 5000, 7, 0, Footprint::Box, &|_, _| {}, &flag);
+        assert!(matches!(r, Err(RenderError::Cancelled)));
     }
 }

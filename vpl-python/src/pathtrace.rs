@@ -8,7 +8,7 @@ use crate::scene::PyScene;
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
-use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, render_cancellable, track_with};
+use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, render_cancellable, track_cancellable};
 use vpl_render::vpl_core::{MaterialPolicy, Mode};
 
 /// An image and its per-pixel standard errors, (height, width, 3) each.
@@ -85,10 +85,11 @@ pub fn render_path<'py>(
 /// shape (n, 3). `footprint="box"` spreads the camera rays over each
 /// pixel's square (as `render_path`); `"centre"` sends them through its
 /// centre, the one point a VPL renderer's G-buffer shades. Deterministic
-/// for any thread count. Releases the GIL; Ctrl-C raises KeyboardInterrupt
-/// when the call returns.
+/// for any thread count. Releases the GIL; Ctrl-C stops it (each thread
+/// ends its batch of 4096 paths) and raises KeyboardInterrupt;
+/// `progress=True` shows a tqdm bar over the batches when tqdm is installed.
 #[pyfunction]
-#[pyo3(signature = (scene, pixels, spp = 4096, mode = "full", max_depth = 5, size = None, seed = 0, footprint = "box", materials = "as-is"))]
+#[pyo3(signature = (scene, pixels, spp = 4096, mode = "full", max_depth = 5, size = None, seed = 0, footprint = "box", materials = "as-is", progress = false))]
 #[allow(clippy::too_many_arguments)] // the Python signature: keyword arguments with defaults
 pub fn track<'py>(
     py: Python<'py>,
@@ -101,6 +102,7 @@ pub fn track<'py>(
     seed: u64,
     footprint: &str,
     materials: &str,
+    progress: bool,
 ) -> PyResult<MeansAndErrors<'py>> {
     if spp == 0 || max_depth == 0 {
         return Err(vpl_err("spp and max_depth must be at least 1"));
@@ -119,6 +121,27 @@ pub fn track<'py>(
     let policy = policy(materials)?;
     let sc = scene.scene.with_material_policy(policy);
     let frame = scene.frame as u64;
-    let out = interruptible(py, |_| track_with(&sc, &camera, &pt, &pixels, spp, seed, frame, footprint), |_| {})?;
+    let done = AtomicU64::new(0);
+    let mut bar = Progress::new(py, progress, pixels.len() as u64 * spp.div_ceil(vpl_pathtrace::TRACK_BATCH) as u64, "tracking")?;
+    let out = interruptible(
+        py,
+        |cancel| {
+            track_cancellable(
+                &sc,
+                &camera,
+                &pt,
+                &pixels,
+                spp,
+                seed,
+                frame,
+                footprint,
+                &|d, _| _ = done.fetch_max(d, Ordering::Relaxed),
+                cancel,
+            )
+        },
+        |py| bar.update(py, done.load(Ordering::Relaxed)),
+    )?;
+    bar.close(py);
+    let out = out.map_err(vpl_err)?;
     Ok((vectors(py, out.iter().map(|t| t.mean)), vectors(py, out.iter().map(|t| t.stderr))))
 }

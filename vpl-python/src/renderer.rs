@@ -173,8 +173,11 @@ impl PyRenderer {
 
     /// Renders frame `index` (the scene's animation at that frame; a scene
     /// without one stays as it is, frames 1/30 s apart) and returns its
-    /// image, float32 (height, width, 3). Releases the GIL; Ctrl-C raises
-    /// KeyboardInterrupt once the frame is done.
+    /// image, float32 (height, width, 3). Releases the GIL; Ctrl-C stops
+    /// the frame at its next stage boundary (before the sampler, after the
+    /// visibility update, after shading) and raises KeyboardInterrupt. An
+    /// interrupted frame may have advanced the sampler (and the visibility
+    /// with it); the next frame renders on from there.
     fn frame<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let base = self.scene.get();
         let count = base.setup.sequence.as_ref().map_or(1, |s| s.frame_count());
@@ -196,7 +199,7 @@ impl PyRenderer {
         let mut state =
             self.state.try_lock().map_err(|_| vpl_err("the renderer is busy (next_frame may not render with its own renderer)"))?;
         let renderer = &mut state.renderer;
-        let result = interruptible(py, |_| renderer.render(&scene, &camera, index as u64, time), |_| {})?;
+        let result = interruptible(py, |cancel| renderer.render_cancellable(&scene, &camera, index as u64, time, cancel), |_| {})?;
         let raised = lock(&self.hooks).error.take();
         if let Some(e) = raised {
             return Err(e);

@@ -47,6 +47,13 @@ def test_progress_bar_draws_when_asked(cornell, capsys):
     pytest.importorskip("tqdm")
     vpl.render_path(cornell, spp=4, size=(16, 16), progress=True)
     assert "path tracing" in capsys.readouterr().err
+    vpl.track(cornell, [(3, 3), (8, 8)], spp=5000, size=(16, 16), progress=True)
+    err = capsys.readouterr().err
+    # Two batches per pixel (4096 + 904 paths), all drawn.
+    assert "tracking" in err and "4/4" in err, err
+    s = vpl.Scene.load("office")
+    vpl.sequence(s, frames=[0, 1], size=(16, 12), vpls=64, progress=True)
+    assert "frames" in capsys.readouterr().err
 
 
 def test_the_progressive_renderer_runs_from_python(cornell):

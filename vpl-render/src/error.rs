@@ -44,6 +44,13 @@ pub enum RenderError {
         /// The frame index.
         frame: u64,
     },
+    /// The frame was cancelled at a stage boundary
+    /// ([`crate::Renderer::render_cancellable`]).
+    #[error("frame {frame} was cancelled")]
+    Cancelled {
+        /// The frame index.
+        frame: u64,
+    },
     /// A tracked pixel lies outside the image.
     #[error("tracked pixel {0},{1} is outside the {2}x{3} image")]
     Pixel(u32, u32, u32, u32),

@@ -1,6 +1,7 @@
 //! One frame of VPL rendering, stage by stage, timed.
 
 use crate::compensation::{Compensation, compensate};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, Stats, VisibilityUpdate, VplSampler, VplVisibility};
 use vpl_shading::{direct_light, render_gbuffer};
@@ -76,6 +77,11 @@ pub struct FrameOutput {
     /// (VPL fluxes or pixels); `None` for a finite frame.
     /// [`crate::Renderer::render`] turns it into [`crate::RenderError::NonFinite`].
     pub non_finite: Option<(&'static str, usize)>,
+    /// The frame stopped at a stage boundary because its cancel flag was set
+    /// ([`render_frame_cancellable_on`]): the image lacks the stages not run.
+    /// [`crate::Renderer::render_cancellable`] turns it into
+    /// [`crate::RenderError::Cancelled`].
+    pub cancelled: bool,
 }
 
 /// Counts the non-finite pixels of `img`.
@@ -129,6 +135,31 @@ pub fn render_frame_on(
     vis: &mut dyn VplVisibility,
     shader: &mut dyn IndirectShader,
 ) -> FrameOutput {
+    render_frame_cancellable_on(gbuffer, gbuffer_ms, scene, camera, s, previous, sampler, vis, shader, &AtomicBool::new(false))
+}
+
+/// [`render_frame_on`] that stops at the next stage boundary once `cancel`
+/// is set (from another thread: a Ctrl-C handler, a viewer's camera move),
+/// with [`FrameOutput::cancelled`] set. The boundaries are before the
+/// sampler, after the visibility update, after shading and after the bias
+/// compensation: the sampler's step and the visibility update it calls for
+/// run together or not at all, so that the visibility always matches the
+/// sampler's set. A frame that is not cancelled is [`render_frame_on`]'s,
+/// bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn render_frame_cancellable_on(
+    gbuffer: GBuffer,
+    gbuffer_ms: f64,
+    scene: &Scene,
+    camera: &Camera,
+    s: FrameSettings,
+    previous: Option<&Image>,
+    sampler: &mut dyn VplSampler,
+    vis: &mut dyn VplVisibility,
+    shader: &mut dyn IndirectShader,
+    cancel: &AtomicBool,
+) -> FrameOutput {
+    let stop = || cancel.load(Ordering::Relaxed);
     let start = Instant::now();
     let mut t = StageTimings { gbuffer_ms, ..StageTimings::default() };
     let mut image = Image::new(camera.resolution.0, camera.resolution.1);
@@ -139,7 +170,8 @@ pub fn render_frame_on(
     let mut indirect = None;
     let mut non_finite = None;
     let (_, max_k) = s.mode.k_range(s.max_depth);
-    if s.mode != Mode::Direct && max_k >= 2 {
+    let mut cancelled = stop();
+    if !cancelled && s.mode != Mode::Direct && max_k >= 2 {
         let frame = Frame { scene, camera, time: s.time, index: s.index, seed: s.seed, gbuffer: &gbuffer, previous };
         let t0 = Instant::now();
         let vpls = sampler.next_frame(&frame);
@@ -151,11 +183,15 @@ pub fn render_frame_on(
         let t0 = Instant::now();
         visibility = vis.update(scene, vpls);
         t.visibility_ms = ms(t0);
-        let t0 = Instant::now();
-        image = shader.shade(&gbuffer, vpls, vis);
-        t.shading_ms = ms(t0);
-        note(&mut non_finite, "indirect shading", count_non_finite(&image));
-        if let Some(c) = s.compensation {
+        cancelled = stop();
+        if !cancelled {
+            let t0 = Instant::now();
+            image = shader.shade(&gbuffer, vpls, vis);
+            t.shading_ms = ms(t0);
+            note(&mut non_finite, "indirect shading", count_non_finite(&image));
+            cancelled = stop();
+        }
+        if let Some(c) = s.compensation.filter(|_| !cancelled) {
             let t0 = Instant::now();
             let added = compensate(scene, &gbuffer, c, s.max_depth, s.seed, s.index);
             t.compensation_ms = ms(t0);
@@ -163,9 +199,16 @@ pub fn render_frame_on(
             for (o, a) in image.data.iter_mut().zip(&added.data) {
                 *o += *a;
             }
+            cancelled = stop();
         }
         sampler_stats = sampler.stats();
-        indirect = Some(image.clone());
+        if !cancelled {
+            indirect = Some(image.clone());
+        }
+    }
+    if cancelled {
+        t.total_ms = ms(start) + gbuffer_ms;
+        return FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite, cancelled };
     }
     if s.mode.includes(0, s.max_depth) {
         note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
@@ -184,5 +227,5 @@ pub fn render_frame_on(
     }
     t.total_ms = ms(start) + gbuffer_ms;
     note(&mut non_finite, "the frame's sum", count_non_finite(&image));
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite, cancelled }
 }

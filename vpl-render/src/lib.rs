@@ -72,7 +72,7 @@ mod spec;
 pub use backend::{Backend, CpuBackend};
 pub use compensation::Compensation;
 pub use error::RenderError;
-pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_on};
+pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_cancellable_on, render_frame_on};
 pub use memory::MemoryEstimate;
 pub use renderer::{Renderer, RendererBuilder, SamplerChoice};
 pub use sequence::{SequenceFrame, default_tracked_pixels, run_sequence};

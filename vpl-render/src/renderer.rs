@@ -5,8 +5,9 @@
 use crate::backend::{Backend, CpuBackend};
 use crate::compensation::Compensation;
 use crate::error::RenderError;
-use crate::frame::{FrameOutput, FrameSettings, render_frame_on};
+use crate::frame::{FrameOutput, FrameSettings, render_frame_cancellable_on};
 use crate::spec::{Clamp, ShadingSpec, VisibilitySpec};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 use vpl_core::{Budget, Camera, GeometryClamp, Image, IndirectShader, Mode, Params, Scene, VplSampler, VplVisibility};
 use vpl_sampling::Registry;
@@ -250,6 +251,24 @@ impl Renderer {
 
     /// Renders frame `index` (at `time` seconds) of `scene` seen by `camera`.
     pub fn render(&mut self, scene: &Scene, camera: &Camera, index: u64, time: f32) -> Result<FrameOutput, RenderError> {
+        self.render_cancellable(scene, camera, index, time, &AtomicBool::new(false))
+    }
+
+    /// [`Renderer::render`] that stops at the next stage boundary once
+    /// `cancel` is set (from another thread) and answers
+    /// [`RenderError::Cancelled`]; see [`crate::render_frame_cancellable_on`]
+    /// for the boundaries. A cancelled frame may have advanced the sampler
+    /// (and with it the visibility, which always matches the sampler's set)
+    /// but leaves the previous frame's image, which adaptive samplers read,
+    /// as it was. A frame that is not cancelled is [`Renderer::render`]'s.
+    pub fn render_cancellable(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        index: u64,
+        time: f32,
+        cancel: &AtomicBool,
+    ) -> Result<FrameOutput, RenderError> {
         let shader = match &mut self.shader {
             Some(shader) => shader,
             unbuilt => {
@@ -273,7 +292,7 @@ impl Renderer {
         let t0 = Instant::now();
         let gbuffer = self.backend.gbuffer(scene, camera)?;
         let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let out = render_frame_on(
+        let out = render_frame_cancellable_on(
             gbuffer,
             ms,
             scene,
@@ -283,7 +302,11 @@ impl Renderer {
             self.sampler.as_mut(),
             self.visibility.as_mut(),
             shader.as_mut(),
+            cancel,
         );
+        if out.cancelled {
+            return Err(RenderError::Cancelled { frame: index });
+        }
         if let Some((stage, count)) = out.non_finite {
             return Err(RenderError::NonFinite { stage, count, frame: index });
         }

@@ -134,3 +134,70 @@ fn the_view_clamp_is_fixed_by_the_first_frame() {
     assert_eq!(r.clamp(), Some(GeometryClamp::for_scene_area(64, setup.scene.surface_area())));
     assert!(r.shader().is_some());
 }
+
+/// A sampler that sets a cancel flag while it samples frame `at`: the
+/// cancellation arrives mid-frame, after the sampler's step.
+struct CancelsDuring<'f> {
+    inner: vpl_sampling::SmcSampler,
+    at: u64,
+    flag: &'f std::sync::atomic::AtomicBool,
+}
+
+impl vpl_core::VplSampler for CancelsDuring<'static> {
+    fn name(&self) -> &'static str {
+        "cancels-during"
+    }
+    fn next_frame(&mut self, frame: &vpl_core::Frame) -> &vpl_core::VplSet {
+        if frame.index == self.at {
+            self.flag.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        self.inner.next_frame(frame)
+    }
+}
+
+/// Cancelling: a flag set before the frame answers `Cancelled` at once; an
+/// unset flag renders `render`'s frame bit for bit; a flag set during the
+/// sampler's step stops the frame after the visibility update, so that the
+/// next frame (flag cleared) is bit for bit that of a renderer that was
+/// never cancelled: sampler and shadow maps stayed in step. SMC over a
+/// moving camera, so that slots move every frame.
+#[test]
+fn a_cancelled_frame_stops_and_leaves_the_renderer_in_step() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let setup = SceneSetup::load("office").unwrap();
+    let frames: Vec<_> = (0..3).map(|f| setup.frame(f * 40).unwrap()).collect();
+    let smc =
+        || vpl_sampling::SmcSampler::new(vpl_sampling::SmcConfig { vpls: 128, warmup: 2, ..vpl_sampling::SmcConfig::default() }).unwrap();
+    let build = |sampler: Box<dyn vpl_core::VplSampler>| {
+        Renderer::builder(&setup.scene)
+            .vpls(128)
+            .sampler(vpl_render::SamplerChoice::Built(sampler))
+            .visibility(VisibilitySpec::ShadowMaps(32))
+            .mode(Mode::Indirect)
+            .seed(5)
+            .build()
+            .unwrap()
+    };
+    let mut plain = build(Box::new(smc()));
+    let plain_frames: Vec<_> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, (scene, camera))| plain.render(scene, &camera.with_resolution((40, 24)).unwrap(), i as u64, 0.0).unwrap().image)
+        .collect();
+
+    static FLAG: AtomicBool = AtomicBool::new(false);
+    let mut r = build(Box::new(CancelsDuring { inner: smc(), at: 1, flag: &FLAG }));
+    let cam = |i: usize| frames[i].1.with_resolution((40, 24)).unwrap();
+    let set = AtomicBool::new(true);
+    assert!(matches!(r.render_cancellable(&frames[0].0, &cam(0), 0, 0.0, &set), Err(RenderError::Cancelled { frame: 0 })));
+    let f0 = r.render_cancellable(&frames[0].0, &cam(0), 0, 0.0, &FLAG).unwrap();
+    assert!(f0.image.data == plain_frames[0].data, "an uncancelled frame differs from render's");
+    match r.render_cancellable(&frames[1].0, &cam(1), 1, 0.0, &FLAG) {
+        Err(RenderError::Cancelled { frame: 1 }) => {}
+        other => panic!("frame 1 was not cancelled: {:?}", other.map(|o| o.stored)),
+    }
+    FLAG.store(false, Ordering::Relaxed);
+    let f2 = r.render_cancellable(&frames[2].0, &cam(2), 2, 0.0, &FLAG).unwrap();
+    assert!(f2.moved > 0, "no slot moved on frame 2");
+    assert!(f2.image.data == plain_frames[2].data, "the frame after a cancelled one differs from an uncancelled renderer's");
+}

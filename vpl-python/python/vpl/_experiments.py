@@ -12,6 +12,17 @@ import numpy as np
 from ._vpl import Renderer, Scene, VplError, default_tracked_pixels, temporal_error, tone_mapped_luminance, track
 
 
+def _bar(items: List[Any], show: bool, desc: str) -> Iterable[Any]:
+    """``items`` under a tqdm bar when ``show`` and tqdm is installed."""
+    if show:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            return items
+        return tqdm(items, desc=desc)
+    return items
+
+
 def _frames(scene: Scene, frames: Optional[Iterable[int]]) -> List[int]:
     if frames is None:
         return list(range(scene.frame_count))
@@ -28,6 +39,7 @@ def sequence(
     size: Optional[Tuple[int, int]] = None,
     renderer: Optional[Renderer] = None,
     images: bool = False,
+    progress: bool = False,
     **settings: Any,
 ) -> Dict[str, Any]:
     """Renders frames of ``scene``'s animation with one renderer (built from
@@ -39,6 +51,8 @@ def sequence(
     (float32 (frames, pixels, 3): their radiance), ``moved`` and
     ``total_ms`` per frame, ``stats`` (each frame's ``Renderer.stats()``),
     and ``images`` (float32 (frames, height, width, 3)) when asked for.
+    ``progress=True`` shows a tqdm bar over the frames when tqdm is
+    installed.
     """
     fr = _frames(scene, frames)
     w, h = size or scene.resolution
@@ -50,7 +64,7 @@ def sequence(
     xs = np.array([p[0] for p in pixels], dtype=np.intp)
     ys = np.array([p[1] for p in pixels], dtype=np.intp)
     rows, stats, kept = [], [], []
-    for f in fr:
+    for f in _bar(fr, progress, "frames"):
         img = r.frame(f)
         rows.append(img[ys, xs])
         stats.append(r.stats())
@@ -78,6 +92,7 @@ def compare_samplers(
     size: Optional[Tuple[int, int]] = None,
     truth_spp: int = 4096,
     seeds: int = 1,
+    progress: bool = False,
     **settings: Any,
 ) -> Dict[str, Any]:
     """A small Table 1: each sampler (a registry name, or a factory
@@ -92,6 +107,8 @@ def compare_samplers(
     and ``rows``, one per sampler: ``e``, ``e_prime`` and ``bias`` (means
     over seeds) with their standard errors over seeds (``e_se``, ...; NaN
     for one seed), and ``values`` (seeds, frames, pixels).
+    ``progress=True`` shows tqdm bars (the truth over frames, then each
+    sampler over its runs) when tqdm is installed.
     """
     fr = _frames(scene, frames)
     w, h = size or scene.resolution
@@ -104,15 +121,15 @@ def compare_samplers(
             tone_mapped_luminance(
                 track(scene.at(f) if scene.frame_count > 1 else scene, pixels, spp=truth_spp, mode=settings["mode"], max_depth=max_depth, size=(w, h), seed=1_000_003 + f, footprint="centre", materials="diffuse")[0]
             )
-            for f in fr
+            for f in _bar(fr, progress, "truth")
         ]
     )
     rows: Dict[str, Dict[str, Any]] = {}
     for name, sampler in samplers.items():
         per_seed, values = [], []
-        for seed in range(seeds):
+        for seed in _bar(list(range(seeds)), progress and seeds > 1, name):
             s = sampler if isinstance(sampler, str) else sampler()
-            seq = sequence(scene, fr, pixels, (w, h), sampler=s, seed=seed, **settings)
+            seq = sequence(scene, fr, pixels, (w, h), sampler=s, seed=seed, progress=progress and seeds == 1, **settings)
             v = tone_mapped_luminance(seq["tracked"])
             values.append(v)
             per_seed.append(temporal_error(v.astype(np.float64), truth))

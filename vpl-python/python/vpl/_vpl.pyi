@@ -130,6 +130,7 @@ def track(
     seed: int = 0,
     footprint: str = "box",
     materials: str = "as-is",
+    progress: bool = False,
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
 def render_progressive(
     scene: Scene,

@@ -506,3 +506,53 @@ fn views_of_nothing_and_dropped_layers_are_warned_in_one_line() {
     assert!(run(&["--scene", "glass", "--spp", "1"]).is_empty());
     assert!(run(&["--scene", "cornell", "--method", "vpl", "--vpls", "64"]).is_empty());
 }
+
+/// `--tev`: for each method, a server in the test receives the packets of
+/// tev's IPC protocol, decoded independently of the client
+/// (`vpl_core::tev::decode_stream`); replayed, they give the image the
+/// render wrote to its EXR, exactly. The path tracer sends tiles (several
+/// packets), the progressive renderer passes. A tev that cannot be
+/// reached is one line and exit 2, before rendering.
+#[test]
+fn render_streams_to_tev() {
+    use std::io::Read;
+    use std::net::TcpListener;
+    use vpl_core::tev::{Decoded, decode_stream, replay};
+    let d = scratch("tev");
+    let methods: [&[&str]; 3] = [
+        &["--method", "path", "--spp", "2"],
+        &["--method", "vpl", "--sampler", "ir", "--vpls", "64"],
+        &["--method", "progressive", "--passes", "3", "--caustic-paths", "500"],
+    ];
+    for args in methods {
+        let l = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = l.local_addr().unwrap().to_string();
+        let server = std::thread::spawn(move || {
+            let (mut s, _) = l.accept().unwrap();
+            let mut buf = Vec::new();
+            s.read_to_end(&mut buf).unwrap();
+            buf
+        });
+        let out = d.join("t.exr");
+        let o = vpl()
+            .args(["render", "--scene", "cornell", "--size", "40x24", "--threads", "2", "--tev", &addr, "--out"])
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        let packets = decode_stream(&server.join().unwrap()).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+        let name = match &packets[0] {
+            Decoded::Create(name, 40, 24, ch) if ch == &["R", "G", "B"] => name.clone(),
+            other => panic!("{args:?}: first packet {other:?}"),
+        };
+        let updates = packets.iter().filter(|p| matches!(p, Decoded::Update(..))).count();
+        assert!(updates >= if args[1] == "vpl" { 1 } else { 2 }, "{args:?}: {updates} updates");
+        let shown = replay(&packets, &name).unwrap();
+        let written = vpl_core::Image::read_exr(&out).unwrap();
+        assert!(shown == written, "{args:?}: tev's image differs from the EXR");
+        assert!(written.mean()[0] > 0.0);
+    }
+    let free = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().to_string();
+    fails(&d, &["--scene", "cornell", "--tev", &free], "--tev: cannot reach tev");
+}

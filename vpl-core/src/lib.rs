@@ -85,6 +85,7 @@ pub mod setup;
 pub mod spectral;
 pub mod stats;
 pub mod surface;
+pub mod tev;
 pub mod traits;
 pub mod triangle;
 pub mod validate;

@@ -77,6 +77,37 @@ pub fn render_cancellable(
     progress: &(dyn Fn(u64, u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<RenderOutput, RenderError> {
+    render_streamed(scene, camera, pt, s, progress, &|_| {}, cancel)
+}
+
+/// A finished tile of a render: its place in the image and the mean
+/// radiance of its pixels, row by row.
+#[derive(Clone, Copy, Debug)]
+pub struct Tile<'a> {
+    /// Left column.
+    pub x: u32,
+    /// Top row.
+    pub y: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width · height` means, row-major.
+    pub mean: &'a [Vec3],
+}
+
+/// [`render_cancellable`] that hands every tile to `on_tile` as it ends
+/// (from the thread that rendered it, in no fixed order), so that a viewer
+/// can show the image as it fills. The image is [`render`]'s bit for bit.
+pub fn render_streamed(
+    scene: &Scene,
+    camera: &Camera,
+    pt: &PathTracer,
+    s: RenderSettings,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    on_tile: &(dyn Fn(Tile<'_>) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RenderOutput, RenderError> {
     if s.spp == 0 {
         return Err(RenderError::ZeroSpp);
     }
@@ -100,6 +131,8 @@ pub fn render_cancellable(
                     out.push(pixel(scene, camera, pt, x, y, s));
                 }
             }
+            let mean: Vec<Vec3> = out.iter().map(|p| p.0).collect();
+            on_tile(Tile { x: x0, y: y0, width: x1 - x0, height: y1 - y0, mean: &mean });
             let d = done.fetch_add(out.len() as u64, Ordering::Relaxed) + out.len() as u64;
             progress(d, total);
             out
@@ -395,5 +428,36 @@ mod tests {
         flag.store(true, Ordering::Relaxed);
         let r = track_cancellable(&setup.scene, &camera, &pt, &pixels, 5000, 7, 0, Footprint::Box, &|_, _| {}, &flag);
         assert!(matches!(r, Err(RenderError::Cancelled)));
+    }
+
+    /// The tiles [`render_streamed`] hands out cover the image once each
+    /// and carry its pixels: laid into an image, they are the render's.
+    #[test]
+    fn streamed_tiles_cover_the_image_with_its_pixels() {
+        let setup = SceneSetup::load("cornell").unwrap();
+        let camera = setup.camera.with_resolution((40, 20)).unwrap();
+        let pt = PathTracer::new(5, Mode::Full);
+        let s = RenderSettings { spp: 2, seed: 9, frame: 0 };
+        let laid = std::sync::Mutex::new((Image::new(40, 20), vec![0u32; 800]));
+        let out = render_streamed(
+            &setup.scene,
+            &camera,
+            &pt,
+            s,
+            &|_, _| {},
+            &|t| {
+                let mut l = laid.lock().unwrap();
+                for (i, m) in t.mean.iter().enumerate() {
+                    let (x, y) = (t.x + i as u32 % t.width, t.y + i as u32 / t.width);
+                    l.0.set(x, y, *m);
+                    l.1[(y * 40 + x) as usize] += 1;
+                }
+            },
+            &AtomicBool::new(false),
+        )
+        .unwrap();
+        let (img, counts) = laid.into_inner().unwrap();
+        assert!(counts.iter().all(|&c| c == 1));
+        assert_eq!(img, out.image);
     }
 }

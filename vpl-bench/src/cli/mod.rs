@@ -29,6 +29,7 @@ mod render;
 mod sequence;
 mod table1;
 mod table2;
+mod tev;
 mod track;
 mod validate_cornell;
 

@@ -1,5 +1,6 @@
 //! `vpl render`: Render one frame of a scene.
 
+use super::tev::TevSink;
 use super::*;
 
 /// Render one frame of a scene.
@@ -37,6 +38,11 @@ pub(super) struct Args {
     /// No progress bar or summary.
     #[arg(long)]
     quiet: bool,
+    /// Show the image in the tev viewer at HOST:PORT (HOST alone: tev's port 14158) as it renders:
+    /// the path tracer's tiles as they finish, each progressive pass (at most four a second, and the
+    /// last), the VPL frame.
+    #[arg(long, value_name = "HOST:PORT")]
+    tev: Option<String>,
 }
 
 /// Runs `vpl render`.
@@ -53,6 +59,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         stderr,
         exposure,
         quiet,
+        tev,
     } = args;
     if method == Method::Vpl && materials == Some(MaterialsArg::AsIs) {
         return Err("--materials as-is: the VPL pipeline draws each material's albedo only (use --method path or progressive)".into());
@@ -92,6 +99,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
             quiet,
             memory_limit,
             &pool,
+            tev.as_deref(),
         );
     }
     if method == Method::Vpl {
@@ -114,6 +122,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
             quiet,
             memory_limit,
             &pool,
+            tev.as_deref(),
         );
     }
     let (sc, camera) = load_frame(&scene, frame, size)?;
@@ -121,6 +130,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let estimate = vpl_render::MemoryEstimate::path_tracer(&sc, camera.resolution);
     check_memory(&estimate, memory_limit)?;
     let pt = tracer(max_depth, mode, clamp, vpls, &sc, &camera);
+    let sink = tev.as_deref().map(|a| TevSink::open(a, format!("{} path {spp} spp", sc.name), camera.resolution)).transpose()?;
     let bar = ProgressBar::with_draw_target(Some(camera.resolution.0 as u64 * camera.resolution.1 as u64), ProgressDrawTarget::hidden());
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {percent}% pixels, eta {eta}").unwrap().progress_chars("=> "),
@@ -134,10 +144,20 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         }
         bar.set_position(done);
     };
+    let on_tile = |t: vpl_pathtrace::Tile<'_>| {
+        if let Some(s) = &sink {
+            s.tile(t);
+        }
+    };
+    let settings = RenderSettings { spp, seed, frame: frame as u64 };
+    let never = AtomicBool::new(false);
     let r = pool
-        .install(|| vpl_pathtrace::render(&sc, &camera, &pt, RenderSettings { spp, seed, frame: frame as u64 }, &progress))
+        .install(|| vpl_pathtrace::render_streamed(&sc, &camera, &pt, settings, &progress, &on_tile, &never))
         .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
+    if let (Some(s), Some(a)) = (sink, &tev) {
+        s.finish(a, quiet);
+    }
     let mut written = Written::default();
     written.image(&r.image, &out, exposure, "the path tracer")?;
     if let Some(s) = &stderr {
@@ -181,6 +201,7 @@ fn render_vpl(
     quiet: bool,
     memory_limit: Option<MemoryArg>,
     pool: &rayon::ThreadPool,
+    tev: Option<&str>,
 ) -> Res<()> {
     let (sc, camera) = load_frame(scene, frame, size)?;
     let sc = with_policy(sc, vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)");
@@ -194,7 +215,12 @@ fn render_vpl(
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }
+    let sink = tev.map(|a| TevSink::open(a, format!("{} vpl {}", sc.name, p.sampler().name()), camera.resolution)).transpose()?;
     let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0)).map_err(crate::pipeline::backend_line)?;
+    if let (Some(s), Some(a)) = (sink, tev) {
+        s.image(&r.image);
+        s.finish(a, quiet);
+    }
     let mut written = Written::default();
     written.image(&r.image, out, exposure, "the VPL frame")?;
     written.keep();
@@ -255,6 +281,7 @@ fn render_progressive(
     quiet: bool,
     memory_limit: Option<MemoryArg>,
     pool: &rayon::ThreadPool,
+    tev: Option<&str>,
 ) -> Res<()> {
     use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
     if p.passes == Some(0) {
@@ -319,6 +346,9 @@ fn render_progressive(
         ..ProgressiveConfig::default()
     };
     let mut r = Progressive::new(&sc, camera, config).map_err(|e| e.to_string())?;
+    let sink = tev.map(|a| TevSink::open(a, format!("{} progressive", sc.name), r.camera().resolution)).transpose()?;
+    // At most four images a second: a whole image per pass would swamp tev on fast passes.
+    let mut sent = None::<Instant>;
     let passes = p.passes.unwrap_or(if p.seconds.is_some() { u64::MAX } else { 64 });
     let snapshots = p.snapshots.as_deref().map(|d| OutDir::create("--snapshots", d)).transpose()?;
     let bar = if quiet {
@@ -340,6 +370,12 @@ fn render_progressive(
         last = pool.install(|| r.pass());
         bar.set_message(format!("{} VPLs, {} photons", last.stored, last.photons));
         bar.inc(1);
+        if let Some(s) = &sink
+            && sent.is_none_or(|t| t.elapsed().as_secs_f32() >= 0.25)
+        {
+            s.image(&r.image());
+            sent = Some(Instant::now());
+        }
         if let (Some(k), Some(d)) = (p.snapshot_every, &snapshots) {
             if r.passes() % k == 0 {
                 let img = r.image();
@@ -354,6 +390,10 @@ fn render_progressive(
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     let img = r.image();
+    if let (Some(s), Some(a)) = (sink, tev) {
+        s.image(&img);
+        s.finish(a, quiet);
+    }
     let mut written = Written::default();
     written.image(&img, out, exposure, "the progressive renderer")?;
     if let Some(s) = stderr {

@@ -11,6 +11,19 @@ import pytest
 import vpl
 
 
+@pytest.fixture(autouse=True)
+def ctrl_c_raises():
+    """SIGINT raises KeyboardInterrupt during each test, as in a terminal.
+
+    A process started in the background of a non-interactive shell inherits
+    SIGINT ignored, and Python then installs no handler of its own: the
+    signal these tests send would be lost. The test's handler is restored
+    afterwards."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def test_ctrl_c_stops_a_long_render(cornell):
     """A render of several minutes, interrupted after 0.5 s by SIGINT (what
     Ctrl-C sends): KeyboardInterrupt within a few seconds (each thread

@@ -3,7 +3,7 @@
 use crate::compensation::{Compensation, compensate};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, Stats, VisibilityUpdate, VplSampler, VplVisibility};
+use vpl_core::{Camera, Frame, GBuffer, Image, IndirectShader, Mode, Scene, Stats, VisibilityUpdate, VplSampler, VplSet, VplVisibility};
 use vpl_shading::{direct_light, render_gbuffer};
 
 /// What a frame renders.
@@ -68,6 +68,10 @@ pub struct FrameOutput {
     pub moved: usize,
     /// VPLs stored in the frame's set.
     pub stored: usize,
+    /// The VPL set the frame was shaded with (positions, normals, fluxes and
+    /// which slots moved; no slots when the mode needs no VPLs): what a
+    /// viewer splats over the image or a study logs per frame.
+    pub vpls: VplSet,
     /// The sampler's statistics of the frame (empty when the mode needs no VPLs).
     pub sampler_stats: Stats,
     /// The indirect light the VPLs gave (`None` when the mode needs no
@@ -167,6 +171,7 @@ pub fn render_frame_cancellable_on(
     let mut sampler_stats = Stats::default();
     let mut moved = 0;
     let mut stored = 0;
+    let mut vpl_set = VplSet::new(0);
     let mut indirect = None;
     let mut non_finite = None;
     let (_, max_k) = s.mode.k_range(s.max_depth);
@@ -178,6 +183,7 @@ pub fn render_frame_cancellable_on(
         t.sampling_ms = ms(t0);
         moved = vpls.moved_count();
         stored = vpls.stored();
+        vpl_set = vpls.clone();
         let bad = vpls.iter().filter(|(_, v)| !(v.flux.is_finite() && v.y.is_finite() && v.n.is_finite())).count();
         note(&mut non_finite, "the VPL sampler", bad);
         let t0 = Instant::now();
@@ -208,7 +214,19 @@ pub fn render_frame_cancellable_on(
     }
     if cancelled {
         t.total_ms = ms(start) + gbuffer_ms;
-        return FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite, cancelled };
+        return FrameOutput {
+            image,
+            gbuffer,
+            timings: t,
+            visibility,
+            moved,
+            stored,
+            vpls: vpl_set,
+            sampler_stats,
+            indirect,
+            non_finite,
+            cancelled,
+        };
     }
     if s.mode.includes(0, s.max_depth) {
         note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
@@ -227,5 +245,5 @@ pub fn render_frame_cancellable_on(
     }
     t.total_ms = ms(start) + gbuffer_ms;
     note(&mut non_finite, "the frame's sum", count_non_finite(&image));
-    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, sampler_stats, indirect, non_finite, cancelled }
+    FrameOutput { image, gbuffer, timings: t, visibility, moved, stored, vpls: vpl_set, sampler_stats, indirect, non_finite, cancelled }
 }

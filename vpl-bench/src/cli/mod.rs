@@ -32,6 +32,7 @@ mod table2;
 mod tev;
 mod track;
 mod validate_cornell;
+mod view;
 
 pub use args::{ClampArg, FramesArg, MemoryArg, PixelArg, Size};
 use output::{ImageOut, OutDir, Written, check_finite, distinct};
@@ -373,6 +374,9 @@ enum Command {
     ProgressiveFigures(progressive_figures::Args),
     /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
     ValidateCornell(validate_cornell::Args),
+    /// Open a window that renders VPL frames continuously (crate vpl-viewer): fly through the
+    /// scene, switch samplers live, split two samplers, splat the VPLs, plot the flicker.
+    View(view::Args),
 }
 
 /// Runs the `vpl` command line on `args` (the program name first, as
@@ -581,6 +585,7 @@ fn dispatch(cli: Cli, registry: &Registry) -> Res<()> {
         Command::Merge(a) => merge::run(a, registry),
         Command::ProgressiveFigures(a) => progressive_figures::run(a, registry),
         Command::ValidateCornell(a) => validate_cornell::run(a, registry),
+        Command::View(a) => view::run(a, registry),
     }
 }
 

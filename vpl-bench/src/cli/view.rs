@@ -1,0 +1,103 @@
+//! `vpl view`: the interactive viewer (crate vpl-viewer) on a scene.
+
+use super::*;
+
+/// Where the viewer's renderer runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ViewBackendArg {
+    /// The GPU when there is an adapter, the CPU at reduced resolution otherwise.
+    Auto,
+    /// The CPU (rayon).
+    Cpu,
+    /// The GPU (wgpu); an error without an adapter.
+    Gpu,
+}
+
+/// Open a window that renders VPL frames continuously: fly, switch samplers, split two of them.
+#[derive(clap::Args)]
+pub(super) struct Args {
+    /// Scene: a built-in name or a scene file (.toml, .obj, .gltf, .glb, Mitsuba .xml).
+    #[arg(long, default_value = "office")]
+    scene: String,
+    /// VPL sampler of the left (or only) side: a registry name.
+    #[arg(long, default_value = "ir")]
+    sampler: String,
+    /// Split view with this sampler on the right.
+    #[arg(long)]
+    split: Option<String>,
+    /// VPL budget of each side.
+    #[arg(long, default_value_t = 256)]
+    vpls: usize,
+    /// Which light paths to include.
+    #[arg(long, value_enum, default_value_t = ModeArg::Full)]
+    mode: ModeArg,
+    /// Where the renderer runs.
+    #[arg(long, value_enum, default_value_t = ViewBackendArg::Auto)]
+    backend: ViewBackendArg,
+    /// Render resolution over the view's size (default 0.5 on the GPU, 0.25 on the CPU).
+    #[arg(long, allow_hyphen_values = true)]
+    scale: Option<f32>,
+    /// Window size.
+    #[arg(long, default_value = "1280x720")]
+    window: Size,
+    /// Seed of the renderers.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Exposure of the tone mapping.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Run a scripted session from this file and close (see the vpl-viewer crate's `script`
+    /// module: frames, sampler, split, overlay, show, mode, vpls, orbit, screenshot, quit).
+    #[arg(long)]
+    script: Option<PathBuf>,
+    /// No summary line at the end.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Runs `vpl view`.
+#[cfg(feature = "viewer")]
+pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
+    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, script, quiet } = args;
+    let script = match script {
+        Some(p) => {
+            let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+            Some(vpl_viewer::Script::parse(&text).map_err(|e| format!("{}: {e}", p.display()))?)
+        }
+        None => None,
+    };
+    if !exposure.is_finite() || exposure <= 0.0 {
+        return Err(format!("--exposure must be positive, got {exposure}"));
+    }
+    let options = vpl_viewer::ViewerOptions {
+        scene,
+        window: (window.0, window.1),
+        backend: match backend {
+            ViewBackendArg::Auto => vpl_viewer::BackendRequest::Auto,
+            ViewBackendArg::Cpu => vpl_viewer::BackendRequest::Cpu,
+            ViewBackendArg::Gpu => vpl_viewer::BackendRequest::Gpu,
+        },
+        scale,
+        sampler,
+        split,
+        vpls,
+        mode: mode_of(mode),
+        seed,
+        exposure,
+        script,
+    };
+    let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
+    if !quiet {
+        eprintln!(
+            "vpl: view: {} frames shown, {:.2} frames/s after the first, render {}x{}; {}",
+            s.frames, s.fps, s.resolution.0, s.resolution.1, s.renderer
+        );
+    }
+    Ok(())
+}
+
+/// Runs `vpl view` in a build without the viewer.
+#[cfg(not(feature = "viewer"))]
+pub(super) fn run(_args: Args, _registry: &Registry) -> Res<()> {
+    Err("this vpl was built without the viewer (feature `viewer` of vpl-bench)".into())
+}

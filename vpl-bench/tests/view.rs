@@ -1,0 +1,205 @@
+//! `vpl view` on a display (Xvfb and lavapipe in CI): a scripted session
+//! switches to a split view and turns the VPL overlay on, and its
+//! screenshots must show the scene, the panel, the split line, the overlay,
+//! and a right half that changed with the sampler. Without a display the
+//! session test says it skipped, unless `VPL_REQUIRE_DISPLAY=1` (CI) makes
+//! that a failure; without one the command must say so in one line, exit 2.
+
+use std::path::Path;
+use std::process::Command;
+
+fn vpl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_vpl"))
+}
+
+fn has_display() -> bool {
+    ["DISPLAY", "WAYLAND_DISPLAY"].iter().any(|v| std::env::var(v).is_ok_and(|s| !s.is_empty()))
+}
+
+struct Png {
+    w: usize,
+    h: usize,
+    rgb: Vec<u8>,
+}
+
+impl Png {
+    fn read(path: &Path) -> Png {
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!(info.color_type, png::ColorType::Rgb, "{}", path.display());
+        buf.truncate(info.buffer_size());
+        Png { w: info.width as usize, h: info.height as usize, rgb: buf }
+    }
+
+    fn px(&self, x: usize, y: usize) -> [u8; 3] {
+        let i = (y * self.w + x) * 3;
+        [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+    }
+}
+
+/// The numbers of a screenshot's JSON that the checks read.
+struct Layout {
+    view: [usize; 4],
+    split_x: Option<usize>,
+    overlay: String,
+    sides: usize,
+}
+
+fn layout(path: &Path) -> Layout {
+    let text = std::fs::read_to_string(path).unwrap();
+    let field = |key: &str| -> String {
+        let start = text.find(&format!("\"{key}\": ")).unwrap_or_else(|| panic!("{key} in {text}")) + key.len() + 4;
+        let rest = &text[start..];
+        rest[..rest.find('\n').unwrap()].trim_end_matches(',').to_string()
+    };
+    let nums = |s: String| -> Vec<f64> { s.trim_matches(['[', ']']).split(',').map(|v| v.trim().parse().unwrap()).collect() };
+    let v = nums(field("view"));
+    let split = field("split_x");
+    Layout {
+        view: [v[0].ceil() as usize, v[1].ceil() as usize, v[2].floor() as usize, v[3].floor() as usize],
+        split_x: (split != "null").then(|| split.parse::<f64>().unwrap().round() as usize),
+        overlay: field("overlay").trim_matches('"').to_string(),
+        sides: field("sides").matches('"').count() / 2,
+    }
+}
+
+/// Mean absolute difference (0–255) of two screenshots over columns `x0..x1`
+/// of rows `y0..y1`, and the share of pixels that differ by more than 8.
+fn difference(a: &Png, b: &Png, x0: usize, x1: usize, y0: usize, y1: usize) -> (f64, f64) {
+    let (mut sum, mut differ, mut n) = (0.0, 0usize, 0usize);
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let (p, q) = (a.px(x, y), b.px(x, y));
+            let d: i32 = (0..3).map(|c| (p[c] as i32 - q[c] as i32).abs()).sum();
+            sum += d as f64 / 3.0;
+            differ += (d > 8 * 3) as usize;
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f64, differ as f64 / n.max(1) as f64)
+}
+
+#[test]
+fn a_scripted_session_shows_the_scene_the_split_and_the_overlay() {
+    if !has_display() {
+        assert!(std::env::var("VPL_REQUIRE_DISPLAY").is_err(), "VPL_REQUIRE_DISPLAY is set and there is no display");
+        eprintln!("skipped: no display (DISPLAY or WAYLAND_DISPLAY); CI runs this under Xvfb");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = |name: &str| dir.path().join(name);
+    let script = format!(
+        "frames 2\nscreenshot {}\nsplit smc\nframes 3\nscreenshot {}\noverlay vpls\nframes 1\nscreenshot {}\nquit\n",
+        shot("alone").display(),
+        shot("split").display(),
+        shot("overlay").display()
+    );
+    let script_path = dir.path().join("session.txt");
+    std::fs::write(&script_path, script).unwrap();
+    let out = vpl()
+        .args(["view", "--scene", "office", "--window", "800x450", "--vpls", "64"])
+        .arg("--script")
+        .arg(&script_path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "vpl view failed: {stderr}");
+    assert!(stderr.contains("frames shown"), "{stderr}");
+    eprintln!("{stderr}");
+
+    for name in ["alone", "split", "overlay"] {
+        for ext in ["png", "exr", "json"] {
+            assert!(shot(&format!("{name}.{ext}")).exists(), "{name}.{ext} written");
+        }
+    }
+    let alone = Png::read(&shot("alone.png"));
+    let split = Png::read(&shot("split.png"));
+    let overlay = Png::read(&shot("overlay.png"));
+    assert_eq!((alone.w, alone.h), (800, 450));
+    let la = layout(&shot("alone.json"));
+    let ls = layout(&shot("split.json"));
+    let lo = layout(&shot("overlay.json"));
+    let [x0, y0, x1, y1] = la.view;
+    assert!(x0 > 100 && x1 <= 800 && y1 <= 450 && x1 > x0 + 100, "the view beside the panel: {:?}", la.view);
+
+    // The scene: the view is not black (office is lit: a mean of 8 of 255 is very dim).
+    let mean = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .map(|(x, y)| alone.px(x, y).iter().map(|v| *v as f64).sum::<f64>() / 3.0)
+        .sum::<f64>()
+        / ((x1 - x0) * (y1 - y0)) as f64;
+    assert!(mean > 8.0, "the view shows the scene: mean {mean:.1} of 255");
+    // The UI: the panel holds text and widgets, many distinct colours, not one fill.
+    let mut colours: Vec<[u8; 3]> = (0..y1).flat_map(|y| (0..x0 - 5).map(move |x| (x, y))).map(|(x, y)| alone.px(x, y)).collect();
+    colours.sort();
+    colours.dedup();
+    assert!(colours.len() > 20, "the panel shows the UI: {} colours", colours.len());
+
+    // The split: no split alone; a white line at split_x over the view's height.
+    assert_eq!((la.split_x, la.sides), (None, 1));
+    assert_eq!(ls.sides, 2);
+    let sx = ls.split_x.expect("split_x of a split view");
+    assert!(sx > x0 + 20 && sx + 20 < x1, "split at {sx} inside {:?}", ls.view);
+    let white = (y0..y1).filter(|y| (sx.saturating_sub(2)..=sx + 2).any(|x| split.px(x, *y).iter().all(|v| *v >= 250))).count();
+    assert!(white as f64 > 0.95 * (y1 - y0) as f64, "the split line: {white} of {} rows", y1 - y0);
+    // The right half shows another sampler (smc instead of ir): it changed.
+    let (right_mad, right_share) = difference(&alone, &split, sx + 4, x1, y0, y1);
+    assert!(
+        right_mad > 1.0 && right_share > 0.05,
+        "the right half changed with the sampler: mean |Δ| {right_mad:.2}, {:.1} % of pixels",
+        100.0 * right_share
+    );
+
+    // The overlay: splats in saturated colours of the flux ramp over a grey
+    // office (its walls, floor and light are grey), none before.
+    assert_eq!((ls.overlay.as_str(), lo.overlay.as_str()), ("off", "vpls"));
+    let saturated = |p: &Png| {
+        (y0..y1)
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let c = p.px(x, y);
+                c.iter().max().unwrap() - c.iter().min().unwrap() > 120
+            })
+            .count()
+    };
+    let (before, after) = (saturated(&split), saturated(&overlay));
+    eprintln!(
+        "view mean {mean:.1}/255, panel colours {}, split line {white}/{} rows, right half mean |Δ| {right_mad:.2} ({:.1} % of pixels), saturated {before} -> {after}",
+        colours.len(),
+        y1 - y0,
+        100.0 * right_share
+    );
+    assert!(after > before + 90, "the overlay splats the VPLs (3×3 each): {before} saturated pixels before, {after} after");
+}
+
+#[test]
+fn without_a_display_view_says_so_in_one_line() {
+    let out = vpl()
+        .args(["view", "--scene", "cornell"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("no display"), "{stderr}");
+}
+
+#[test]
+fn a_bad_script_or_sampler_is_one_line_before_any_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.txt");
+    std::fs::write(&bad, "frames 1\nfly away\n").unwrap();
+    let out = vpl().arg("view").arg("--script").arg(&bad).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("line 2") && stderr.trim_end().lines().count() == 1, "{stderr}");
+    let out = vpl().args(["view", "--sampler", "nonesuch"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("unknown sampler `nonesuch`"), "{stderr}");
+}

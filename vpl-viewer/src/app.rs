@@ -1,0 +1,1082 @@
+//! The window: winit's event loop, a wgpu surface, egui's panel and the
+//! view, the render thread's jobs and replies, the scripted session.
+
+use crate::camera::FlyCamera;
+use crate::script::Step;
+use crate::view::{Channel, Composite, Overlay, SideFrame, compose};
+use crate::worker::{self, BackendChoice, Job, Reply, SideResult, SideSpec};
+use crate::{BackendRequest, Summary, ViewerError, ViewerOptions};
+use std::collections::VecDeque;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::time::{Duration, Instant};
+use vpl_core::glam::Vec3;
+use vpl_core::{Light, MaterialPolicy, Mode, Scene, SceneSetup};
+use vpl_sampling::Registry;
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::window::{Window, WindowId};
+
+/// Width of the control panel in points.
+const PANEL_WIDTH: f32 = 330.0;
+/// Frames of history the plots show.
+const HISTORY: usize = 240;
+/// A camera move cancels the frame in flight once it has run this long
+/// (shorter frames finish: flying on a slow backend still shows frames).
+const CANCEL_AFTER: Duration = Duration::from_millis(150);
+
+/// Wakes the event loop: the render thread has a reply.
+#[derive(Clone, Copy, Debug)]
+struct Wake;
+
+pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, ViewerError> {
+    let mut setup = SceneSetup::load(&options.scene)?;
+    // The VPL pipeline draws each material's diffuse albedo.
+    setup.scene = setup.scene.with_material_policy(MaterialPolicy::Diffuse);
+    let (backend, renderer_line, default_scale) = choose_backend(options.backend)?;
+    let mut builder = EventLoop::<Wake>::with_user_event();
+    // A library call may come from any thread (a test, a notebook's worker);
+    // X11 and Wayland allow it (macOS does not: call from the main thread there).
+    #[cfg(target_os = "linux")]
+    {
+        winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
+        winit::platform::wayland::EventLoopBuilderExtWayland::with_any_thread(&mut builder, true);
+    }
+    let event_loop = builder.build().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    let proxy = event_loop.create_proxy();
+    let (jobs, job_rx) = mpsc::channel::<Job>();
+    let (reply_tx, replies) = mpsc::channel::<Reply>();
+    let worker_registry = registry.clone();
+    let seed = options.seed;
+    let worker = std::thread::Builder::new()
+        .name("vpl-view render".into())
+        .spawn(move || {
+            worker::run(job_rx, reply_tx, worker_registry, backend, seed, move || {
+                let _ = proxy.send_event(Wake);
+            })
+        })
+        .map_err(|e| ViewerError::Render(format!("cannot start the render thread: {e}")))?;
+    let scale = options.scale.unwrap_or(default_scale);
+    let mut app = App { gfx: None, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
+    let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(e.to_string()));
+    let App { st, gfx } = app;
+    drop(gfx);
+    if let Some((_, cancel, _)) = &st.in_flight {
+        cancel.store(true, Ordering::Relaxed);
+    }
+    let summary = st.summary();
+    let fatal = st.fatal;
+    drop(st.jobs);
+    let _ = worker.join();
+    looped?;
+    match fatal {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+fn choose_backend(req: BackendRequest) -> Result<(BackendChoice, String, f32), ViewerError> {
+    const CPU_SCALE: f32 = 0.25;
+    if req == BackendRequest::Cpu {
+        return Ok((BackendChoice::Cpu, "renderer: CPU (--backend cpu), ¼ resolution".into(), CPU_SCALE));
+    }
+    #[cfg(feature = "gpu")]
+    match vpl_gpu::Gpu::new() {
+        Ok(gpu) => {
+            let line = format!("renderer: GPU, {}", gpu.ctx().describe());
+            Ok((BackendChoice::Gpu(gpu), line, 0.5))
+        }
+        Err(e) if req == BackendRequest::Gpu => Err(ViewerError::Backend(e.to_string())),
+        Err(_) => Ok((BackendChoice::Cpu, "renderer: CPU at ¼ resolution (no GPU adapter)".into(), CPU_SCALE)),
+    }
+    #[cfg(not(feature = "gpu"))]
+    match req {
+        BackendRequest::Gpu => Err(ViewerError::Backend("this build has no GPU backend (feature `gpu` of vpl-viewer)".into())),
+        _ => Ok((BackendChoice::Cpu, "renderer: CPU at ¼ resolution (built without the GPU backend)".into(), CPU_SCALE)),
+    }
+}
+
+struct App {
+    gfx: Option<Gfx>,
+    st: State,
+}
+
+/// The window and what draws into it.
+struct Gfx {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    config: wgpu::SurfaceConfiguration,
+    egui: egui_winit::State,
+    painter: egui_wgpu::Renderer,
+}
+
+impl Gfx {
+    fn new(el: &ActiveEventLoop, size: (u32, u32), title: &str) -> Result<Gfx, ViewerError> {
+        let attrs = Window::default_attributes().with_title(title).with_inner_size(winit::dpi::PhysicalSize::new(size.0, size.1));
+        let window = Arc::new(el.create_window(attrs).map_err(|e| ViewerError::NoDisplay(e.to_string()))?);
+        let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY | wgpu::Backends::GL);
+        let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends, ..Default::default() });
+        let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Surface(e.to_string()))?;
+        let adapter = pollster::block_on(
+            instance.request_adapter(&wgpu::RequestAdapterOptions { compatible_surface: Some(&surface), ..Default::default() }),
+        )
+        .map_err(|e| ViewerError::NoAdapter(e.to_string()))?;
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor { label: Some("vpl-viewer"), ..Default::default() }))
+                .map_err(|e| ViewerError::NoAdapter(e.to_string()))?;
+        let caps = surface.get_capabilities(&adapter);
+        let format = egui_wgpu::preferred_framebuffer_format(&caps.formats).map_err(|e| ViewerError::Surface(e.to_string()))?;
+        let inner = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: inner.width.max(1),
+            height: inner.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: vec![],
+        };
+        surface.configure(&device, &config);
+        let ctx = egui::Context::default();
+        let max_side = device.limits().max_texture_dimension_2d as usize;
+        let egui = egui_winit::State::new(ctx, egui::ViewportId::ROOT, &window, Some(window.scale_factor() as f32), None, Some(max_side));
+        let painter = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
+        Ok(Gfx { window, surface, device, queue, config, egui, painter })
+    }
+
+    fn resize(&mut self, w: u32, h: u32) {
+        if w > 0 && h > 0 {
+            self.config.width = w;
+            self.config.height = h;
+            self.surface.configure(&self.device, &self.config);
+        }
+    }
+
+    /// Draws egui's primitives into `target`.
+    fn paint(
+        &mut self,
+        target: &wgpu::TextureView,
+        prims: &[egui::ClippedPrimitive],
+        sd: &egui_wgpu::ScreenDescriptor,
+    ) -> wgpu::CommandEncoder {
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("vpl-viewer") });
+        let extra = self.painter.update_buffers(&self.device, &self.queue, &mut enc, prims, sd);
+        self.queue.submit(extra);
+        {
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target,
+                        resolve_target: None,
+                        depth_slice: None,
+                        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                })
+                .forget_lifetime();
+            self.painter.render(&mut pass, prims, sd);
+        }
+        enc
+    }
+
+    /// The window's pixels as RGB (egui drawn into a texture like the surface's).
+    fn capture(&mut self, prims: &[egui::ClippedPrimitive], sd: &egui_wgpu::ScreenDescriptor) -> Result<(u32, u32, Vec<u8>), String> {
+        let (w, h) = (self.config.width, self.config.height);
+        let extent = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 };
+        let texture = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("vpl-viewer screenshot"),
+            size: extent,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.config.format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let mut enc = self.paint(&view, prims, sd);
+        let row = (w * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl-viewer screenshot"),
+            size: row as u64 * h as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(h) },
+            },
+            extent,
+        );
+        self.queue.submit([enc.finish()]);
+        let slice = buffer.slice(..);
+        let (tx, rx) = mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| e.to_string())?;
+        rx.recv().map_err(|e| e.to_string())?.map_err(|e| e.to_string())?;
+        let data = slice.get_mapped_range();
+        let bgra = matches!(self.config.format, wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb);
+        let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+        for y in 0..h {
+            let line = &data[(y * row) as usize..(y * row + w * 4) as usize];
+            for p in line.chunks_exact(4) {
+                if bgra { rgb.extend([p[2], p[1], p[0]]) } else { rgb.extend([p[0], p[1], p[2]]) }
+            }
+        }
+        drop(data);
+        buffer.unmap();
+        Ok((w, h, rgb))
+    }
+}
+
+/// One side's recent frames, for the plots.
+#[derive(Default)]
+struct History {
+    /// (frame number, total ms, sampling ms, visibility ms, shading ms, VPLs moved, Σ|ΔL|/ΣL).
+    rows: VecDeque<[f64; 7]>,
+}
+
+impl History {
+    fn push(&mut self, s: &SideResult) {
+        // A rebuilt side (another sampler, budget or mode) starts its plot afresh.
+        if s.index == 0 {
+            self.rows.clear();
+        }
+        let t = s.out.timings;
+        self.rows.push_back([
+            s.index as f64,
+            t.total_ms,
+            t.sampling_ms,
+            t.visibility_ms,
+            t.shading_ms,
+            s.out.moved as f64,
+            s.change.unwrap_or(f64::NAN),
+        ]);
+        while self.rows.len() > HISTORY {
+            self.rows.pop_front();
+        }
+    }
+
+    fn series(&self, column: usize) -> Vec<[f64; 2]> {
+        self.rows.iter().filter(|r| r[column].is_finite()).map(|r| [r[0], r[column]]).collect()
+    }
+}
+
+fn side(s: &SideResult) -> SideFrame<'_> {
+    SideFrame { image: &s.out.image, gbuffer: &s.out.gbuffer, vpls: &s.out.vpls, camera: &s.camera }
+}
+
+/// Everything but the window.
+struct State {
+    scene_name: String,
+    names: Vec<String>,
+    setup: SceneSetup,
+    cam: FlyCamera,
+    speed: f32,
+    renderer_line: String,
+    window_size: (u32, u32),
+    // What the frames are rendered with.
+    sides: [String; 2],
+    split: bool,
+    vpls: usize,
+    mode: Mode,
+    scale: f32,
+    channel: Channel,
+    overlay: Overlay,
+    exposure: f32,
+    // Animation and a light moved by hand.
+    frame_count: u32,
+    anim_frame: u32,
+    playing: bool,
+    play_clock: f64,
+    follow_camera: bool,
+    manual_lights: Option<Vec<Light>>,
+    lights_version: u64,
+    scene_cache: Option<((u32, u64), Arc<Scene>)>,
+    // The render thread.
+    jobs: Sender<Job>,
+    replies: Receiver<Reply>,
+    generation: u64,
+    in_flight: Option<(u64, Arc<AtomicBool>, Instant)>,
+    stalled: bool,
+    // The last frame and its picture.
+    last: Vec<SideResult>,
+    composite: Option<Composite>,
+    recompose: bool,
+    texture: Option<egui::TextureHandle>,
+    view_rect: Option<egui::Rect>,
+    pixels_per_point: f32,
+    history: [History; 2],
+    error_line: Option<String>,
+    status_line: Option<String>,
+    frames_shown: u64,
+    first_frame_at: Option<Instant>,
+    last_frame_at: Option<Instant>,
+    last_tick: Instant,
+    // The scripted session.
+    scripted: bool,
+    script: VecDeque<Step>,
+    waiting: u32,
+    pending_shot: Option<PathBuf>,
+    shots: u32,
+    quit: bool,
+    fatal: Option<ViewerError>,
+}
+
+impl State {
+    fn new(
+        o: ViewerOptions,
+        registry: &Registry,
+        setup: SceneSetup,
+        renderer_line: String,
+        scale: f32,
+        jobs: Sender<Job>,
+        replies: Receiver<Reply>,
+    ) -> State {
+        let frame_count = setup.sequence.as_ref().map_or(1, |s| s.frame_count().max(1));
+        let split = o.split.is_some();
+        let right = o.split.clone().unwrap_or_else(|| if o.sampler == "smc" { "ir".into() } else { "smc".into() });
+        let scripted = o.script.is_some();
+        State {
+            scene_name: setup.scene.name.clone(),
+            names: registry.names().into_iter().map(str::to_string).collect(),
+            cam: FlyCamera::from_camera(&setup.camera),
+            speed: setup.scene.radius().max(1e-3) * 0.5,
+            setup,
+            renderer_line,
+            window_size: o.window,
+            sides: [o.sampler, right],
+            split,
+            vpls: o.vpls,
+            mode: o.mode,
+            scale,
+            channel: Channel::Image,
+            overlay: Overlay::Off,
+            exposure: o.exposure,
+            frame_count,
+            anim_frame: 0,
+            playing: false,
+            play_clock: 0.0,
+            follow_camera: true,
+            manual_lights: None,
+            lights_version: 0,
+            scene_cache: None,
+            jobs,
+            replies,
+            generation: 0,
+            in_flight: None,
+            stalled: false,
+            last: Vec::new(),
+            composite: None,
+            recompose: false,
+            texture: None,
+            view_rect: None,
+            pixels_per_point: 1.0,
+            history: [History::default(), History::default()],
+            error_line: None,
+            status_line: None,
+            frames_shown: 0,
+            first_frame_at: None,
+            last_frame_at: None,
+            last_tick: Instant::now(),
+            scripted,
+            script: o.script.map(|s| s.steps.into()).unwrap_or_default(),
+            waiting: 0,
+            pending_shot: None,
+            shots: 0,
+            quit: false,
+            fatal: None,
+        }
+    }
+
+    fn summary(&self) -> Summary {
+        let fps = match (self.first_frame_at, self.last_frame_at) {
+            (Some(a), Some(b)) if self.frames_shown > 1 && b > a => (self.frames_shown - 1) as f64 / (b - a).as_secs_f64(),
+            _ => 0.0,
+        };
+        Summary { frames: self.frames_shown, fps, renderer: self.renderer_line.clone(), resolution: self.resolution() }
+    }
+
+    fn fail(&mut self, e: ViewerError) {
+        if self.fatal.is_none() {
+            self.fatal = Some(e);
+        }
+        self.quit = true;
+    }
+
+    /// The view's size in pixels: the central panel's last size, or the
+    /// window's less the panel before the first layout.
+    fn view_pixels(&self) -> (f32, f32) {
+        match self.view_rect {
+            Some(r) => (r.width() * self.pixels_per_point, r.height() * self.pixels_per_point),
+            None => ((self.window_size.0 as f32 - PANEL_WIDTH * self.pixels_per_point).max(64.0), self.window_size.1 as f32),
+        }
+    }
+
+    fn resolution(&self) -> (u32, u32) {
+        let (w, h) = self.view_pixels();
+        (((w * self.scale).round() as u32).max(16), ((h * self.scale).round() as u32).max(16))
+    }
+
+    fn specs(&self) -> Vec<SideSpec> {
+        let n = if self.split { 2 } else { 1 };
+        self.sides[..n].iter().map(|s| SideSpec { sampler: s.clone(), vpls: self.vpls, mode: self.mode }).collect()
+    }
+
+    /// What the frames are rendered from changed. `hard`: what a side
+    /// renders with changed, so the frame in flight is stopped at once;
+    /// otherwise (the camera, the light) only once it has run a while.
+    fn changed(&mut self, hard: bool) {
+        self.generation += 1;
+        self.stalled = false;
+        if let Some((_, cancel, started)) = &self.in_flight
+            && (hard || started.elapsed() > CANCEL_AFTER)
+        {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    }
+
+    fn scene(&mut self) -> Result<Arc<Scene>, ViewerError> {
+        let key = (self.anim_frame, self.lights_version);
+        if let Some((k, s)) = &self.scene_cache
+            && *k == key
+        {
+            return Ok(s.clone());
+        }
+        let (mut scene, _) = self.setup.frame(self.anim_frame)?;
+        if let Some(l) = &self.manual_lights {
+            scene = scene.with_lights(l.clone())?;
+        }
+        let scene = Arc::new(scene);
+        self.scene_cache = Some((key, scene.clone()));
+        Ok(scene)
+    }
+
+    /// Sends the next job when none is in flight: frames render continuously.
+    fn submit(&mut self) {
+        if self.in_flight.is_some() || self.stalled || self.quit {
+            return;
+        }
+        let scene = match self.scene() {
+            Ok(s) => s,
+            Err(e) => {
+                self.error_line = Some(e.to_string());
+                self.stalled = true;
+                return;
+            }
+        };
+        let camera = match self.cam.camera(&self.setup.camera, self.resolution()) {
+            Ok(c) => c,
+            Err(e) => {
+                self.error_line = Some(format!("camera: {e}"));
+                self.stalled = true;
+                return;
+            }
+        };
+        let time = self.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim_frame));
+        let cancel = Arc::new(AtomicBool::new(false));
+        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone() };
+        if self.jobs.send(job).is_ok() {
+            self.in_flight = Some((self.generation, cancel, Instant::now()));
+        } else {
+            self.fail(ViewerError::Render("the render thread stopped".into()));
+        }
+    }
+
+    /// Takes the render thread's replies.
+    fn poll(&mut self) {
+        while let Ok(reply) = self.replies.try_recv() {
+            let Some((generation, _, _)) = self.in_flight.take() else { continue };
+            match reply {
+                Reply::Frame { sides, .. } => {
+                    let now = Instant::now();
+                    self.first_frame_at.get_or_insert(now);
+                    self.last_frame_at = Some(now);
+                    self.frames_shown += 1;
+                    if generation == self.generation {
+                        self.waiting = self.waiting.saturating_sub(1);
+                    }
+                    for (h, s) in self.history.iter_mut().zip(&sides) {
+                        h.push(s);
+                    }
+                    self.last = sides;
+                    self.error_line = None;
+                    self.recompose = true;
+                }
+                Reply::Cancelled => {}
+                Reply::Failed(e) => {
+                    if self.scripted {
+                        self.fail(ViewerError::Render(e.clone()));
+                    }
+                    self.error_line = Some(e);
+                    if generation == self.generation {
+                        self.stalled = true;
+                    }
+                }
+            }
+        }
+    }
+
+    fn compose(&mut self, ctx: &egui::Context) {
+        if !self.recompose {
+            return;
+        }
+        self.recompose = false;
+        let Some(left) = self.last.first() else { return };
+        let right = self.last.get(1).filter(|r| r.out.image.width == left.out.image.width && r.out.image.height == left.out.image.height);
+        let c = compose(side(left), right.map(side), self.channel, self.overlay, self.exposure);
+        let image = egui::ColorImage::from_rgba_unmultiplied([c.width as usize, c.height as usize], &c.rgba);
+        match &mut self.texture {
+            Some(t) => t.set(image, egui::TextureOptions::NEAREST),
+            None => self.texture = Some(ctx.load_texture("vpl-view", image, egui::TextureOptions::NEAREST)),
+        }
+        self.composite = Some(c);
+    }
+
+    /// Runs the script's steps up to the next wait (after the first frame).
+    fn advance_script(&mut self) {
+        if !self.scripted || self.frames_shown == 0 || self.pending_shot.is_some() || self.quit {
+            return;
+        }
+        while self.waiting == 0 {
+            let Some(step) = self.script.pop_front() else {
+                self.quit = true;
+                return;
+            };
+            match step {
+                Step::Frames(n) => self.waiting = n,
+                Step::Sampler(name) => {
+                    if !self.check_sampler(&name) {
+                        return;
+                    }
+                    self.sides[0] = name;
+                    self.changed(true);
+                }
+                Step::Split(name) => {
+                    if let Some(name) = name {
+                        if !self.check_sampler(&name) {
+                            return;
+                        }
+                        self.sides[1] = name;
+                        self.split = true;
+                    } else {
+                        self.split = false;
+                    }
+                    self.changed(true);
+                }
+                Step::Overlay(o) => {
+                    self.overlay = o;
+                    self.recompose = true;
+                }
+                Step::Show(c) => {
+                    self.channel = c;
+                    self.recompose = true;
+                }
+                Step::Mode(m) => {
+                    self.mode = m;
+                    self.changed(true);
+                }
+                Step::Vpls(n) => {
+                    self.vpls = n;
+                    self.changed(true);
+                }
+                Step::Orbit(yaw, pitch) => {
+                    self.cam.orbit(yaw.to_radians(), pitch.to_radians());
+                    self.changed(true);
+                }
+                Step::Screenshot(path) => {
+                    self.pending_shot = Some(path);
+                    return;
+                }
+                Step::Quit => {
+                    self.script.clear();
+                    self.quit = true;
+                    return;
+                }
+            }
+        }
+    }
+
+    fn check_sampler(&mut self, name: &str) -> bool {
+        if self.names.iter().any(|n| n == name) {
+            return true;
+        }
+        self.fail(ViewerError::UnknownSampler { name: name.into(), known: self.names.join(", ") });
+        false
+    }
+
+    /// Advances the animation and the keyboard flight by the time since the last tick.
+    fn tick(&mut self, ctx: &egui::Context) {
+        let now = Instant::now();
+        let dt = (now - self.last_tick).as_secs_f32().min(0.1);
+        self.last_tick = now;
+        if self.playing
+            && let Some(seq) = &self.setup.sequence
+        {
+            self.play_clock += dt as f64;
+            let f = ((self.play_clock * seq.fps as f64) as u64 % self.frame_count as u64) as u32;
+            if f != self.anim_frame {
+                self.set_anim_frame(f);
+            }
+        }
+        if ctx.wants_keyboard_input() {
+            return;
+        }
+        let (mut f, mut r, mut u, fast) = ctx.input(|i| {
+            let k = |key| if i.key_down(key) { 1.0f32 } else { 0.0 };
+            (k(egui::Key::W) - k(egui::Key::S), k(egui::Key::D) - k(egui::Key::A), k(egui::Key::E) - k(egui::Key::Q), i.modifiers.shift)
+        });
+        if f != 0.0 || r != 0.0 || u != 0.0 {
+            let step = self.speed * dt * if fast { 4.0 } else { 1.0 };
+            f *= step;
+            r *= step;
+            u *= step;
+            self.cam.fly(f, r, u);
+            self.changed(false);
+        }
+    }
+
+    fn set_anim_frame(&mut self, f: u32) {
+        self.anim_frame = f.min(self.frame_count - 1);
+        if self.follow_camera
+            && let Ok(c) = self.setup.camera_at_frame(self.anim_frame)
+        {
+            self.cam = FlyCamera::from_camera(&c);
+        }
+        self.changed(false);
+    }
+
+    /// Keeps redrawing without input: keys held, an animation playing, a
+    /// frame in flight is answered by a wake-up instead.
+    fn wants_ticks(&self, ctx: &egui::Context) -> bool {
+        self.playing
+            || ctx.input(|i| {
+                [egui::Key::W, egui::Key::A, egui::Key::S, egui::Key::D, egui::Key::Q, egui::Key::E].iter().any(|k| i.key_down(*k))
+            })
+    }
+
+    /// Moves the first point or spot light in the view plane by a drag of
+    /// `(dx, dy)` view pixels (turns a directional light).
+    fn move_light(&mut self, dx: f32, dy: f32) {
+        let view_w = self.view_pixels().0.max(1.0);
+        let lights = self
+            .manual_lights
+            .get_or_insert_with(|| self.scene_cache.as_ref().map_or_else(|| self.setup.scene.extra_lights(), |(_, s)| s.extra_lights()));
+        let right = self.cam.right();
+        let up = right.cross(self.cam.forward).normalize_or(Vec3::Y);
+        let fov = self.setup.camera.fov_deg.to_radians();
+        let moved = lights.iter_mut().find_map(|l| match l {
+            Light::Point { position, .. } | Light::Spot { position, .. } => {
+                let dist = (*position - self.cam.origin).dot(self.cam.forward).abs().max(1e-3);
+                let per_px = 2.0 * dist * (0.5 * fov).tan() / view_w;
+                *position += (right * dx - up * dy) * per_px;
+                Some(())
+            }
+            Light::Directional { direction, .. } => {
+                let turn = vpl_core::glam::Quat::from_axis_angle(self.cam.up, -dx * 0.005)
+                    * vpl_core::glam::Quat::from_axis_angle(right, -dy * 0.005);
+                *direction = (turn * *direction).normalize_or(*direction);
+                Some(())
+            }
+            _ => None,
+        });
+        if moved.is_some() {
+            self.lights_version += 1;
+            self.changed(false);
+        } else {
+            self.status_line = Some("the scene has no point, spot or directional light to move".into());
+        }
+    }
+
+    fn ui(&mut self, ctx: &egui::Context) {
+        egui::SidePanel::left("controls").resizable(false).exact_width(PANEL_WIDTH).show(ctx, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
+        });
+        egui::CentralPanel::default().frame(egui::Frame::NONE.fill(egui::Color32::BLACK)).show(ctx, |ui| self.view(ui));
+    }
+
+    fn sampler_combo(ui: &mut egui::Ui, id: &str, names: &[String], value: &mut String) -> bool {
+        let before = value.clone();
+        egui::ComboBox::from_id_salt(id).selected_text(value.as_str()).show_ui(ui, |ui| {
+            for n in names {
+                ui.selectable_value(value, n.clone(), n.as_str());
+            }
+        });
+        *value != before
+    }
+
+    fn panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading(format!("vpl view: {}", self.scene_name));
+        ui.label(&self.renderer_line);
+        let res = self.resolution();
+        ui.label(format!("render {}×{} (scale {:.2} of the view)", res.0, res.1, self.scale));
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.label("light");
+            for (m, name) in [(Mode::Full, "full"), (Mode::Direct, "direct"), (Mode::Indirect, "indirect")] {
+                if ui.selectable_label(self.mode == m, name).clicked() && self.mode != m {
+                    self.mode = m;
+                    self.changed(true);
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            let mut v = self.vpls;
+            ui.label("VPLs");
+            ui.add(egui::DragValue::new(&mut v).range(1..=65536));
+            if v != self.vpls {
+                self.vpls = v;
+                self.changed(true);
+            }
+            let mut s = self.scale;
+            ui.label("scale");
+            ui.add(egui::DragValue::new(&mut s).range(0.05..=1.0).speed(0.01));
+            if s != self.scale {
+                self.scale = s;
+                self.changed(true);
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label(if self.split { "left" } else { "sampler" });
+            if Self::sampler_combo(ui, "left", &self.names, &mut self.sides[0]) {
+                self.changed(true);
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.checkbox(&mut self.split, "split, right").changed() {
+                self.changed(true);
+            }
+            if self.split && Self::sampler_combo(ui, "right", &self.names, &mut self.sides[1]) {
+                self.changed(true);
+            }
+        });
+        ui.horizontal(|ui| {
+            let mut on = self.overlay == Overlay::Vpls;
+            if ui.checkbox(&mut on, "VPLs (colour: flux; ring: moved)").changed() {
+                self.overlay = if on { Overlay::Vpls } else { Overlay::Off };
+                self.recompose = true;
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("show");
+            let before = self.channel;
+            egui::ComboBox::from_id_salt("channel").selected_text(self.channel.name()).show_ui(ui, |ui| {
+                for c in Channel::ALL {
+                    ui.selectable_value(&mut self.channel, c, c.name());
+                }
+            });
+            ui.label("exposure");
+            let e = self.exposure;
+            ui.add(egui::DragValue::new(&mut self.exposure).range(0.01..=100.0).speed(0.05));
+            if self.channel != before || self.exposure != e {
+                self.recompose = true;
+            }
+        });
+        if self.frame_count > 1 {
+            ui.horizontal(|ui| {
+                if ui.button(if self.playing { "pause" } else { "play" }).clicked() {
+                    self.playing = !self.playing;
+                    if let Some(seq) = &self.setup.sequence {
+                        self.play_clock = self.anim_frame as f64 / seq.fps as f64;
+                    }
+                }
+                let mut f = self.anim_frame;
+                ui.add(egui::Slider::new(&mut f, 0..=self.frame_count - 1).text("frame"));
+                if f != self.anim_frame {
+                    self.playing = false;
+                    self.set_anim_frame(f);
+                }
+            });
+            ui.checkbox(&mut self.follow_camera, "camera follows the animation");
+        }
+        ui.separator();
+        for s in &self.last {
+            let t = s.out.timings;
+            ui.label(
+                egui::RichText::new(format!(
+                    "{}: {:.1} ms (G-buffer {:.1}, sampling {:.1}, visibility {:.1}, shading {:.1}, direct {:.1})\n{} stored, {} moved{}",
+                    s.spec.sampler,
+                    t.total_ms,
+                    t.gbuffer_ms,
+                    t.sampling_ms,
+                    t.visibility_ms,
+                    t.shading_ms,
+                    t.direct_ms,
+                    s.out.stored,
+                    s.out.moved,
+                    s.change.map_or(String::new(), |c| format!(", Σ|ΔL|/ΣL {c:.4}"))
+                ))
+                .small(),
+            );
+        }
+        let names: Vec<String> = self.last.iter().map(|s| s.spec.sampler.clone()).collect();
+        let plot = |ui: &mut egui::Ui, id: &str, title: &str, columns: &[(usize, &str)], history: &[History; 2]| {
+            ui.label(title);
+            egui_plot::Plot::new(id)
+                .height(80.0)
+                .allow_drag(false)
+                .allow_zoom(false)
+                .allow_scroll(false)
+                .include_y(0.0)
+                .legend(egui_plot::Legend::default())
+                .show(ui, |p| {
+                    for (k, h) in history.iter().enumerate().take(names.len()) {
+                        for (c, what) in columns {
+                            let label = if what.is_empty() { names[k].clone() } else { format!("{} {what}", names[k]) };
+                            p.line(egui_plot::Line::new(label, h.series(*c)));
+                        }
+                    }
+                });
+        };
+        plot(ui, "ms", "milliseconds per frame (total, sampling)", &[(1, ""), (2, "sampling")], &self.history);
+        plot(ui, "moved", "VPLs moved per frame", &[(5, "")], &self.history);
+        plot(ui, "change", "frame-to-frame change Σ|ΔL|/ΣL", &[(6, "")], &self.history);
+        ui.separator();
+        if ui.button("screenshot (PNG, EXR)").clicked() {
+            self.shots += 1;
+            self.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.shots)));
+        }
+        ui.label(
+            egui::RichText::new("left drag: orbit · right drag: look · WASD QE: fly · wheel: dolly · Ctrl+drag: move the light").small(),
+        );
+        if let Some(s) = &self.status_line {
+            ui.label(egui::RichText::new(s).small());
+        }
+        if let Some(e) = &self.error_line {
+            ui.colored_label(egui::Color32::from_rgb(255, 90, 90), e);
+        }
+    }
+
+    fn view(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        if self.view_rect.is_none_or(|r| (r.size() - rect.size()).length() > 0.5) {
+            let first = self.view_rect.is_none();
+            self.view_rect = Some(rect);
+            if !first {
+                self.changed(true);
+            }
+        }
+        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        match &self.texture {
+            Some(t) => {
+                ui.painter().image(
+                    t.id(),
+                    rect,
+                    egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                    egui::Color32::WHITE,
+                );
+            }
+            None => {
+                ui.painter().text(
+                    rect.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "rendering the first frame…",
+                    egui::FontId::proportional(18.0),
+                    egui::Color32::GRAY,
+                );
+            }
+        }
+        let d = response.drag_delta() * self.pixels_per_point;
+        if d != egui::Vec2::ZERO {
+            let ctrl = ui.input(|i| i.modifiers.command);
+            if response.dragged_by(egui::PointerButton::Primary) && ctrl {
+                self.move_light(d.x, d.y);
+            } else if response.dragged_by(egui::PointerButton::Primary) {
+                self.cam.orbit(-d.x * 0.005, -d.y * 0.005);
+                self.changed(false);
+            } else if response.dragged_by(egui::PointerButton::Secondary) {
+                self.cam.look(-d.x * 0.003, -d.y * 0.003);
+                self.changed(false);
+            }
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.cam.dolly(scroll * 0.002);
+                self.changed(false);
+            }
+        }
+    }
+
+    /// Writes a screenshot: the window's pixels, the view's values, and
+    /// where the view and the split lie in the window.
+    fn write_shot(&self, path: &Path, window: (u32, u32, Vec<u8>)) -> Result<PathBuf, ViewerError> {
+        let with = |ext: &str| {
+            let mut s = OsString::from(path.as_os_str());
+            s.push(ext);
+            PathBuf::from(s)
+        };
+        let write_err = |p: &Path, e: &dyn std::fmt::Display| ViewerError::Write { path: p.to_path_buf(), reason: e.to_string() };
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| write_err(dir, &e))?;
+        }
+        let (w, h, rgb) = window;
+        let png = with(".png");
+        vpl_core::image::write_png_rgb8(&png, w, h, &rgb)?;
+        let exr = with(".exr");
+        if let Some(c) = &self.composite {
+            c.hdr.write_exr(&exr)?;
+        }
+        let ppp = self.pixels_per_point;
+        let view = self.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
+        let split = self.composite.as_ref().and_then(|c| c.split_x.map(|s| view[0] + (s as f32 / c.width as f32) * (view[2] - view[0])));
+        let sides: Vec<String> = self.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
+        let res = self.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
+        let json = format!(
+            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {}\n}}\n",
+            view[0],
+            view[1],
+            view[2],
+            view[3],
+            split.map_or("null".to_string(), |s| format!("{s:.1}")),
+            res.0,
+            res.1,
+            sides.join(", "),
+            self.channel.name(),
+            match self.overlay {
+                Overlay::Off => "off",
+                Overlay::Vpls => "vpls",
+            },
+            self.frames_shown
+        );
+        let j = with(".json");
+        vpl_core::image::write_atomic(&j, json.as_bytes())?;
+        Ok(png)
+    }
+}
+
+impl App {
+    fn redraw(&mut self, el: &ActiveEventLoop) {
+        let Some(gfx) = self.gfx.as_mut() else { return };
+        let st = &mut self.st;
+        st.poll();
+        st.advance_script();
+        if st.quit {
+            el.exit();
+            return;
+        }
+        let raw = gfx.egui.take_egui_input(&gfx.window);
+        let ctx = gfx.egui.egui_ctx().clone();
+        st.pixels_per_point = ctx.pixels_per_point();
+        st.tick(&ctx);
+        let out = ctx.run(raw, |ctx| {
+            st.compose(ctx);
+            st.ui(ctx);
+        });
+        st.compose(&ctx);
+        st.submit();
+        gfx.egui.handle_platform_output(&gfx.window, out.platform_output);
+        let prims = ctx.tessellate(out.shapes, out.pixels_per_point);
+        for (id, delta) in &out.textures_delta.set {
+            gfx.painter.update_texture(&gfx.device, &gfx.queue, *id, delta);
+        }
+        let sd =
+            egui_wgpu::ScreenDescriptor { size_in_pixels: [gfx.config.width, gfx.config.height], pixels_per_point: out.pixels_per_point };
+        match gfx.surface.get_current_texture() {
+            Ok(frame) => {
+                let view = frame.texture.create_view(&wgpu::TextureViewDescriptor::default());
+                let enc = gfx.paint(&view, &prims, &sd);
+                gfx.queue.submit([enc.finish()]);
+                gfx.window.pre_present_notify();
+                frame.present();
+            }
+            Err(wgpu::SurfaceError::Outdated | wgpu::SurfaceError::Lost) => {
+                let s = gfx.window.inner_size();
+                gfx.resize(s.width, s.height);
+                gfx.window.request_redraw();
+            }
+            Err(wgpu::SurfaceError::Timeout) => gfx.window.request_redraw(),
+            Err(e) => {
+                st.fail(ViewerError::Surface(e.to_string()));
+                el.exit();
+            }
+        }
+        // A screenshot once the view shows a frame of what the script set up.
+        if st.texture.is_some()
+            && !st.recompose
+            && let Some(path) = st.pending_shot.take()
+        {
+            match gfx.capture(&prims, &sd).map_err(ViewerError::Surface).and_then(|px| st.write_shot(&path, px)) {
+                Ok(p) => st.status_line = Some(format!("wrote {}", p.display())),
+                Err(e) if st.scripted => {
+                    st.fail(e);
+                    el.exit();
+                }
+                Err(e) => st.error_line = Some(e.to_string()),
+            }
+            gfx.window.request_redraw();
+        }
+        for id in &out.textures_delta.free {
+            gfx.painter.free_texture(id);
+        }
+        let delay = out.viewport_output.get(&egui::ViewportId::ROOT).map_or(Duration::MAX, |v| v.repaint_delay);
+        if st.wants_ticks(&ctx) || st.pending_shot.is_some() || delay.is_zero() {
+            el.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(16)));
+            gfx.window.request_redraw();
+        } else if delay < Duration::from_secs(1) {
+            el.set_control_flow(ControlFlow::WaitUntil(Instant::now() + delay));
+        } else {
+            el.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}
+
+impl ApplicationHandler<Wake> for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.gfx.is_some() {
+            return;
+        }
+        match Gfx::new(el, self.st.window_size, &format!("vpl view: {}", self.st.scene_name)) {
+            Ok(g) => {
+                g.window.request_redraw();
+                self.gfx = Some(g);
+            }
+            Err(e) => {
+                self.st.fail(e);
+                el.exit();
+            }
+        }
+    }
+
+    fn user_event(&mut self, _el: &ActiveEventLoop, _wake: Wake) {
+        if let Some(g) = &self.gfx {
+            g.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(gfx) = self.gfx.as_mut() else { return };
+        let response = gfx.egui.on_window_event(&gfx.window, &event);
+        match event {
+            WindowEvent::CloseRequested => {
+                self.st.quit = true;
+                el.exit();
+            }
+            WindowEvent::Resized(s) => {
+                gfx.resize(s.width, s.height);
+                self.st.window_size = (s.width, s.height);
+                gfx.window.request_redraw();
+            }
+            WindowEvent::RedrawRequested => self.redraw(el),
+            _ => {
+                if response.repaint {
+                    gfx.window.request_redraw();
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,155 @@
+//! # vpl-viewer
+//!
+//! An interactive viewer of VPL renders: a window (winit, wgpu, egui) that
+//! renders frames continuously with [`vpl_render::Renderer`], on the GPU
+//! backend when there is an adapter and on the CPU at a reduced resolution
+//! otherwise (stated on screen). Pick the sampler live from the registry
+//! (a program's own samplers included), split the view between two
+//! samplers on the same camera and lights, splat the VPLs over the image
+//! (coloured by flux, those that moved this frame ringed), look at
+//! G-buffer channels, and watch per-stage milliseconds, VPLs moved and the
+//! frame-to-frame change Σ|ΔL|/ΣL (what the SMC paper's |E′| measures) in
+//! live plots.
+//!
+//! `vpl view --scene office` is this crate's [`run`]; a program with its
+//! own samplers calls it with its registry:
+//!
+//! ```no_run
+//! let registry = vpl_sampling::Registry::builtin();
+//! let options = vpl_viewer::ViewerOptions::new("office");
+//! vpl_viewer::run(options, &registry).unwrap();
+//! ```
+//!
+//! What the window shows is built by pure functions, usable without a
+//! window: here a frame of the Cornell box split against itself with the
+//! VPLs splatted, and a scripted session parsed:
+//!
+//! ```
+//! use vpl_core::SceneSetup;
+//! use vpl_render::Renderer;
+//! use vpl_viewer::view::{compose, Channel, Overlay, SideFrame};
+//!
+//! let setup = SceneSetup::load("cornell").unwrap();
+//! let camera = setup.camera.with_resolution((24, 24)).unwrap();
+//! let mut r = Renderer::builder(&setup.scene).vpls(16).build().unwrap();
+//! let out = r.render(&setup.scene, &camera, 0, 0.0).unwrap();
+//! let side = SideFrame { image: &out.image, gbuffer: &out.gbuffer, vpls: &out.vpls, camera: &camera };
+//! let view = compose(side, Some(side), Channel::Image, Overlay::Vpls, 1.0);
+//! assert_eq!(view.split_x, Some(12));
+//! assert_eq!(view.rgba.len(), 24 * 24 * 4);
+//!
+//! let script = vpl_viewer::Script::parse("sampler smc\nframes 2\nscreenshot shot").unwrap();
+//! assert_eq!(script.steps.len(), 3);
+//! ```
+//!
+//! ## Input
+//!
+//! Drag with the left button to orbit around the point looked at, with the
+//! right button to look around; W A S D fly, Q E down and up (Shift: faster);
+//! the wheel dollies toward the point looked at; Ctrl + left drag moves the
+//! scene's first point or spot light in the view plane (a directional light
+//! turns). A scene with an animation plays, pauses and scrubs on the panel.
+
+#![warn(missing_docs)]
+
+mod app;
+pub mod camera;
+mod error;
+pub mod script;
+pub mod view;
+pub mod worker;
+
+pub use error::ViewerError;
+pub use script::{Script, ScriptError, Step};
+
+use vpl_core::Mode;
+use vpl_sampling::Registry;
+
+/// Where the renderer runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendRequest {
+    /// The GPU when there is an adapter, the CPU otherwise.
+    #[default]
+    Auto,
+    /// The CPU.
+    Cpu,
+    /// The GPU; an error without an adapter.
+    Gpu,
+}
+
+/// How the viewer starts.
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    /// Scene: a built-in name or a scene file (as `vpl render --scene`).
+    pub scene: String,
+    /// Window size in pixels.
+    pub window: (u32, u32),
+    /// Where the renderer runs.
+    pub backend: BackendRequest,
+    /// Render resolution over the view's size (default ½ on the GPU, ¼ on
+    /// the CPU).
+    pub scale: Option<f32>,
+    /// Sampler of the left (or only) side.
+    pub sampler: String,
+    /// Sampler of the right side of a split view.
+    pub split: Option<String>,
+    /// VPL budget of each side.
+    pub vpls: usize,
+    /// Which light paths the frames include.
+    pub mode: Mode,
+    /// Seed of the renderers.
+    pub seed: u64,
+    /// Exposure of the tone mapping.
+    pub exposure: f32,
+    /// A scripted session: the viewer runs it and closes (see [`script`]).
+    pub script: Option<Script>,
+}
+
+impl ViewerOptions {
+    /// The defaults for `scene`: a 1280×720 window, IR with 256 VPLs, full light.
+    pub fn new(scene: impl Into<String>) -> ViewerOptions {
+        ViewerOptions {
+            scene: scene.into(),
+            window: (1280, 720),
+            backend: BackendRequest::Auto,
+            scale: None,
+            sampler: "ir".into(),
+            split: None,
+            vpls: 256,
+            mode: Mode::Full,
+            seed: 0,
+            exposure: 1.0,
+            script: None,
+        }
+    }
+}
+
+/// What a session did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Summary {
+    /// Frames shown (every side rendered).
+    pub frames: u64,
+    /// Frames shown per second over the session, the first frame excluded
+    /// (it builds the samplers' state).
+    pub fps: f64,
+    /// Where the renderer ran, in words.
+    pub renderer: String,
+    /// Render resolution at the end.
+    pub resolution: (u32, u32),
+}
+
+/// Opens the viewer's window and runs until it is closed (or the script ends).
+pub fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, ViewerError> {
+    for name in std::iter::once(&options.sampler).chain(options.split.as_ref()) {
+        if !registry.contains(name) {
+            return Err(ViewerError::UnknownSampler { name: name.clone(), known: registry.names().join(", ") });
+        }
+    }
+    if options.vpls == 0 {
+        return Err(ViewerError::Invalid("the VPL budget must be positive".into()));
+    }
+    if let Some(s) = options.scale.filter(|s| !(s.is_finite() && *s > 0.0 && *s <= 1.0)) {
+        return Err(ViewerError::Invalid(format!("the render scale must be in (0, 1], got {s}")));
+    }
+    app::run(options, registry)
+}

@@ -1,0 +1,299 @@
+//! What the view shows: a side's image or one of its G-buffer channels,
+//! two sides split down the middle, and the VPLs splatted over them. Pure
+//! functions of the frames, so every picture the window shows can be
+//! checked without a window.
+
+use glam::Vec3;
+use vpl_core::image::{linear_to_srgb, luminance, reinhard};
+use vpl_core::{Camera, GBuffer, Image, VplSet};
+
+/// The image or a G-buffer channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Channel {
+    /// The frame's radiance, tone-mapped (Reinhard, sRGB).
+    #[default]
+    Image,
+    /// Diffuse albedo ρ.
+    Albedo,
+    /// Shading normals, mapped from [−1, 1] to [0, 1].
+    Normals,
+    /// Distance along the camera ray, relative to the farthest surface seen.
+    Depth,
+}
+
+impl Channel {
+    /// Every channel, in menu order.
+    pub const ALL: [Channel; 4] = [Channel::Image, Channel::Albedo, Channel::Normals, Channel::Depth];
+
+    /// Its name in menus and scripts.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Image => "image",
+            Channel::Albedo => "albedo",
+            Channel::Normals => "normals",
+            Channel::Depth => "depth",
+        }
+    }
+
+    /// The channel of a name.
+    pub fn parse(name: &str) -> Option<Channel> {
+        Channel::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
+/// What is drawn over the view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Overlay {
+    /// Nothing.
+    #[default]
+    Off,
+    /// Each VPL the camera sees (not hidden behind the G-buffer's surface) as
+    /// a 3×3 splat coloured by its flux, relative to the set's median (blue
+    /// dim, red bright); those that moved this frame ringed in white.
+    Vpls,
+}
+
+/// One side of the view: a frame and the camera it was rendered from.
+#[derive(Clone, Copy)]
+pub struct SideFrame<'a> {
+    /// Radiance.
+    pub image: &'a Image,
+    /// The frame's G-buffer (same size as the image).
+    pub gbuffer: &'a GBuffer,
+    /// The VPLs the frame was shaded with.
+    pub vpls: &'a VplSet,
+    /// The camera it was rendered from.
+    pub camera: &'a Camera,
+}
+
+/// The view as the window shows it.
+#[derive(Clone, Debug)]
+pub struct Composite {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Display pixels (sRGB, RGBA, row-major).
+    pub rgba: Vec<u8>,
+    /// What the display pixels show before tone mapping (radiance, or the
+    /// channel's values), overlay excluded: a screenshot's EXR.
+    pub hdr: Image,
+    /// First column of the right side, when split.
+    pub split_x: Option<u32>,
+}
+
+/// Colour of the split line and of the ring of a VPL that moved.
+pub const MARK: [u8; 4] = [255, 255, 255, 255];
+
+/// Half-width of the split line in pixels.
+const SPLIT_HALF_WIDTH: u32 = 1;
+
+/// The left side over the whole view, or split down the middle with the
+/// right side's right half. Both sides must be the same size.
+pub fn compose(left: SideFrame, right: Option<SideFrame>, channel: Channel, overlay: Overlay, exposure: f32) -> Composite {
+    let (w, h) = (left.image.width, left.image.height);
+    let split_x = right.map(|_| w / 2);
+    let far = |g: &GBuffer| g.samples.iter().map(|s| s.depth).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
+    let far_l = far(left.gbuffer);
+    let far_r = right.map_or(far_l, |r| far(r.gbuffer));
+    let mut hdr = Image::new(w, h);
+    let mut rgba = vec![0u8; (w * h * 4) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let (side, far) = match (right, split_x) {
+                (Some(r), Some(s)) if x >= s => (r, far_r),
+                _ => (left, far_l),
+            };
+            let i = (y * w + x) as usize;
+            let g = side.gbuffer.samples.get(i);
+            let (value, display) = match channel {
+                Channel::Image => {
+                    let c = side.image.data.get(i).copied().unwrap_or(Vec3::ZERO);
+                    (c, linear_to_srgb(reinhard(c * exposure)))
+                }
+                Channel::Albedo => {
+                    let a = g.map_or(Vec3::ZERO, |g| g.albedo);
+                    (a, linear_to_srgb(a))
+                }
+                Channel::Normals => {
+                    let n = g.filter(|g| g.depth.is_finite()).map_or(Vec3::ZERO, |g| g.n);
+                    let v = if n == Vec3::ZERO { Vec3::ZERO } else { n * 0.5 + 0.5 };
+                    (n, v)
+                }
+                Channel::Depth => {
+                    let d = g.map_or(f32::INFINITY, |g| g.depth);
+                    let v = if d.is_finite() { 1.0 - d / far } else { 0.0 };
+                    (Vec3::splat(if d.is_finite() { d } else { 0.0 }), Vec3::splat(v))
+                }
+            };
+            hdr.set(x, y, value);
+            let px = [display.x, display.y, display.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+            rgba[i * 4..i * 4 + 4].copy_from_slice(&[px[0], px[1], px[2], 255]);
+        }
+    }
+    if overlay == Overlay::Vpls {
+        splat_vpls(&mut rgba, w, h, left, 0, split_x.unwrap_or(w));
+        if let (Some(r), Some(s)) = (right, split_x) {
+            splat_vpls(&mut rgba, w, h, r, s, w);
+        }
+    }
+    if let Some(s) = split_x {
+        for y in 0..h {
+            for x in s.saturating_sub(SPLIT_HALF_WIDTH)..(s + SPLIT_HALF_WIDTH).min(w) {
+                let i = ((y * w + x) * 4) as usize;
+                rgba[i..i + 4].copy_from_slice(&MARK);
+            }
+        }
+    }
+    Composite { width: w, height: h, rgba, hdr, split_x }
+}
+
+/// A colour for `t` in [0, 1]: blue, cyan, green, yellow, red.
+pub fn heat(t: f32) -> [u8; 4] {
+    let t = t.clamp(0.0, 1.0);
+    let stops =
+        [Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.0, 0.9, 1.0), Vec3::new(0.1, 1.0, 0.2), Vec3::new(1.0, 0.95, 0.0), Vec3::new(1.0, 0.1, 0.0)];
+    let f = t * (stops.len() - 1) as f32;
+    let i = (f as usize).min(stops.len() - 2);
+    let c = stops[i].lerp(stops[i + 1], f - i as f32);
+    [(c.x * 255.0) as u8, (c.y * 255.0) as u8, (c.z * 255.0) as u8, 255]
+}
+
+/// Splats `side`'s visible VPLs into columns `x0..x1` of the view.
+fn splat_vpls(rgba: &mut [u8], w: u32, h: u32, side: SideFrame, x0: u32, x1: u32) {
+    let mut lum: Vec<f32> = side.vpls.iter().map(|(_, v)| luminance(v.flux)).filter(|l| *l > 0.0).collect();
+    if lum.is_empty() {
+        return;
+    }
+    lum.sort_by(f32::total_cmp);
+    let median = lum[lum.len() / 2].max(f32::MIN_POSITIVE);
+    let mut put = |x: i64, y: i64, c: [u8; 4]| {
+        if x >= x0 as i64 && x < x1 as i64 && y >= 0 && y < h as i64 {
+            let i = ((y as u32 * w + x as u32) * 4) as usize;
+            rgba[i..i + 4].copy_from_slice(&c);
+        }
+    };
+    for (slot, v) in side.vpls.iter() {
+        let Some((px, py)) = side.camera.project(v.y) else { continue };
+        if !(px >= 0.0 && py >= 0.0 && px < w as f32 && py < h as f32) {
+            continue;
+        }
+        let (x, y) = (px as u32, py as u32);
+        // Hidden behind the surface the pixel sees: not splatted.
+        let seen = side.gbuffer.samples.get((y * w + x) as usize).map_or(f32::INFINITY, |g| g.depth);
+        let dist = (v.y - side.camera.origin).length();
+        if dist > seen * 1.02 + 1e-3 * seen.max(1.0) {
+            continue;
+        }
+        // log₁₀ of flux over the median, −2 … +2, onto the colour ramp.
+        let t = ((luminance(v.flux) / median).max(1e-6).log10() + 2.0) / 4.0;
+        let c = heat(t);
+        let (x, y) = (x as i64, y as i64);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                put(x + dx, y + dy, c);
+            }
+        }
+        if side.vpls.moved(slot) {
+            for d in -2..=2 {
+                put(x + d, y - 2, MARK);
+                put(x + d, y + 2, MARK);
+                put(x - 2, y + d, MARK);
+                put(x + 2, y + d, MARK);
+            }
+        }
+    }
+}
+
+/// The frame-to-frame change Σ|ΔL| / ΣL over pixels and channels (what the
+/// SMC paper's |E′| measures, here of one frame against the one before).
+pub fn temporal_change(previous: &Image, current: &Image) -> Option<f64> {
+    if previous.width != current.width || previous.height != current.height {
+        return None;
+    }
+    let (mut diff, mut sum) = (0.0f64, 0.0f64);
+    for (a, b) in previous.data.iter().zip(&current.data) {
+        diff += ((*b - *a).abs().element_sum()) as f64;
+        sum += b.element_sum().max(0.0) as f64;
+    }
+    (sum > 0.0).then_some(diff / sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vpl_core::{FovAxis, GSample, Vpl};
+
+    fn scene_frame(value: Vec3) -> (Image, GBuffer, Camera) {
+        let (w, h) = (32, 16);
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 60.0, FovAxis::X, (w, h)).unwrap();
+        let mut image = Image::new(w, h);
+        image.data.iter_mut().for_each(|p| *p = value);
+        let s = GSample { p: Vec3::ZERO, n: Vec3::Z, ng: Vec3::Z, albedo: Vec3::splat(0.5), emitted: Vec3::ZERO, material: 0, depth: 5.0 };
+        let gbuffer = GBuffer { width: w, height: h, samples: vec![s; (w * h) as usize], pixel_angle: 0.01, eye: camera.origin };
+        (image, gbuffer, camera)
+    }
+
+    fn px(c: &Composite, x: u32, y: u32) -> [u8; 4] {
+        let i = ((y * c.width + x) * 4) as usize;
+        c.rgba[i..i + 4].try_into().unwrap()
+    }
+
+    #[test]
+    fn a_split_shows_each_side_on_its_half_with_a_line_between() {
+        let (a, ga, cam) = scene_frame(Vec3::splat(0.2));
+        let (b, gb, _) = scene_frame(Vec3::splat(2.0));
+        let none = VplSet::new(0);
+        let l = SideFrame { image: &a, gbuffer: &ga, vpls: &none, camera: &cam };
+        let r = SideFrame { image: &b, gbuffer: &gb, vpls: &none, camera: &cam };
+        let c = compose(l, Some(r), Channel::Image, Overlay::Off, 1.0);
+        assert_eq!(c.split_x, Some(16));
+        assert_eq!(px(&c, 16, 5), MARK);
+        assert!(px(&c, 3, 5)[0] < px(&c, 28, 5)[0]);
+        assert_eq!(c.hdr.get(3, 5), Vec3::splat(0.2));
+        assert_eq!(c.hdr.get(28, 5), Vec3::splat(2.0));
+        let alone = compose(l, None, Channel::Image, Overlay::Off, 1.0);
+        assert_eq!(alone.split_x, None);
+        assert_eq!(px(&alone, 28, 5), px(&alone, 3, 5));
+    }
+
+    #[test]
+    fn visible_vpls_are_splatted_and_hidden_ones_are_not() {
+        let (a, g, cam) = scene_frame(Vec3::splat(0.2));
+        let mut set = VplSet::new(2);
+        let vpl = |y: Vec3, id| Vpl { y, n: Vec3::Z, flux: Vec3::ONE, id, bounce: 1 };
+        set.set(0, Some(vpl(Vec3::ZERO, 1)));
+        // Behind the surface at depth 5 the G-buffer sees.
+        set.set(1, Some(vpl(Vec3::new(1.0, 0.0, -3.0), 2)));
+        let l = SideFrame { image: &a, gbuffer: &g, vpls: &set, camera: &cam };
+        let off = compose(l, None, Channel::Image, Overlay::Off, 1.0);
+        let on = compose(l, None, Channel::Image, Overlay::Vpls, 1.0);
+        let (cx, cy) = cam.project(Vec3::ZERO).unwrap();
+        assert_ne!(px(&on, cx as u32, cy as u32), px(&off, cx as u32, cy as u32));
+        // The first frame marks every slot moved: ringed.
+        assert_eq!(px(&on, cx as u32 + 2, cy as u32), MARK);
+        let (hx, hy) = cam.project(Vec3::new(1.0, 0.0, -3.0)).unwrap();
+        assert_eq!(px(&on, hx as u32, hy as u32), px(&off, hx as u32, hy as u32));
+        assert_eq!(on.hdr.data, off.hdr.data);
+    }
+
+    #[test]
+    fn channels_show_the_gbuffer() {
+        let (a, g, cam) = scene_frame(Vec3::splat(0.2));
+        let none = VplSet::new(0);
+        let l = SideFrame { image: &a, gbuffer: &g, vpls: &none, camera: &cam };
+        let n = compose(l, None, Channel::Normals, Overlay::Off, 1.0);
+        assert_eq!(px(&n, 4, 4), [128, 128, 255, 255]);
+        let d = compose(l, None, Channel::Depth, Overlay::Off, 1.0);
+        assert_eq!(d.hdr.get(4, 4), Vec3::splat(5.0));
+        assert_eq!(Channel::parse("albedo"), Some(Channel::Albedo));
+    }
+
+    #[test]
+    fn temporal_change_is_relative() {
+        let (a, _, _) = scene_frame(Vec3::splat(1.0));
+        let (b, _, _) = scene_frame(Vec3::splat(1.5));
+        assert!((temporal_change(&a, &b).unwrap() - 0.5 / 1.5).abs() < 1e-9);
+        assert_eq!(temporal_change(&a, &a), Some(0.0));
+    }
+}

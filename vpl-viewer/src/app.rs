@@ -434,7 +434,8 @@ impl State {
 
     fn specs(&self) -> Vec<SideSpec> {
         let n = if self.split { 2 } else { 1 };
-        self.sides[..n].iter().map(|s| SideSpec { sampler: s.clone(), vpls: self.vpls, mode: self.mode }).collect()
+        let resolution = self.resolution();
+        self.sides[..n].iter().map(|s| SideSpec { sampler: s.clone(), vpls: self.vpls, mode: self.mode, resolution }).collect()
     }
 
     /// What the frames are rendered from changed. `hard`: what a side
@@ -499,7 +500,16 @@ impl State {
 
     /// Takes the render thread's replies.
     fn poll(&mut self) {
-        while let Ok(reply) = self.replies.try_recv() {
+        loop {
+            let reply = match self.replies.try_recv() {
+                Ok(r) => r,
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => {
+                    self.in_flight = None;
+                    self.fail(ViewerError::Render("the render thread stopped".into()));
+                    break;
+                }
+            };
             let Some((generation, _, _)) = self.in_flight.take() else { continue };
             match reply {
                 Reply::Frame { sides, .. } => {

@@ -23,6 +23,9 @@ pub struct SideSpec {
     pub vpls: usize,
     /// Which light paths the frame includes.
     pub mode: Mode,
+    /// Render resolution: a new size is a new renderer, so no stage ever
+    /// sees state kept for another size.
+    pub resolution: (u32, u32),
 }
 
 /// A frame the window asks for.
@@ -105,11 +108,22 @@ pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, back
             job = newer;
         }
         let t0 = Instant::now();
-        let reply = render_job(&job, &mut sides, &registry, &backend, seed);
+        // A panic in a stage must not leave the window waiting for a reply
+        // that never comes: it is a failed frame, and the sides start afresh.
+        let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| render_job(&job, &mut sides, &registry, &backend, seed)));
         let reply = match reply {
-            Ok(sides) => Reply::Frame { sides, ms: t0.elapsed().as_secs_f64() * 1e3 },
-            Err(None) => Reply::Cancelled,
-            Err(Some(e)) => Reply::Failed(e),
+            Ok(Ok(sides)) => Reply::Frame { sides, ms: t0.elapsed().as_secs_f64() * 1e3 },
+            Ok(Err(None)) => Reply::Cancelled,
+            Ok(Err(Some(e))) => Reply::Failed(e),
+            Err(panic) => {
+                sides.clear();
+                let what = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Reply::Failed(format!("internal error in a render stage: {what}"))
+            }
         };
         if replies.send(reply).is_err() {
             return;

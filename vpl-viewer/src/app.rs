@@ -512,7 +512,7 @@ impl State {
             };
             let Some((generation, _, _)) = self.in_flight.take() else { continue };
             match reply {
-                Reply::Frame { sides, .. } => {
+                Reply::Frame { sides } => {
                     let now = Instant::now();
                     self.first_frame_at.get_or_insert(now);
                     self.last_frame_at = Some(now);

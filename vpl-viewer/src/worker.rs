@@ -8,7 +8,6 @@ use crate::view::temporal_change;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
-use std::time::Instant;
 use vpl_core::{Camera, Image, Mode, Scene};
 use vpl_render::{Backend, FrameOutput, RenderError, Renderer};
 use vpl_sampling::Registry;
@@ -62,8 +61,6 @@ pub enum Reply {
     Frame {
         /// The sides, in the job's order.
         sides: Vec<SideResult>,
-        /// Wall time of the job in milliseconds.
-        ms: f64,
     },
     /// The job was cancelled.
     Cancelled,
@@ -102,17 +99,13 @@ struct Side {
 /// reply so the window redraws.
 pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, backend: BackendChoice, seed: u64, wake: impl Fn()) {
     let mut sides: Vec<Option<Side>> = Vec::new();
-    while let Ok(mut job) = jobs.recv() {
-        // Only the newest job matters.
-        while let Ok(newer) = jobs.try_recv() {
-            job = newer;
-        }
-        let t0 = Instant::now();
+    // One reply per job: the window sends the next job when this one is answered.
+    while let Ok(job) = jobs.recv() {
         // A panic in a stage must not leave the window waiting for a reply
         // that never comes: it is a failed frame, and the sides start afresh.
         let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| render_job(&job, &mut sides, &registry, &backend, seed)));
         let reply = match reply {
-            Ok(Ok(sides)) => Reply::Frame { sides, ms: t0.elapsed().as_secs_f64() * 1e3 },
+            Ok(Ok(sides)) => Reply::Frame { sides },
             Ok(Err(None)) => Reply::Cancelled,
             Ok(Err(Some(e))) => Reply::Failed(e),
             Err(panic) => {

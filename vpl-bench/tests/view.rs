@@ -1,7 +1,10 @@
 //! `vpl view` on a display (Xvfb and lavapipe in CI): a scripted session
 //! switches to a split view and turns the VPL overlay on, and its
 //! screenshots must show the scene, the panel, the split line, the overlay,
-//! and a right half that changed with the sampler. Without a display the
+//! and a right half that changed with the sampler; a second picks a VPL
+//! (its shadow map and interleaving class shown), accumulates the path
+//! tracer's reference and its difference, and records a camera path as a
+//! scene file that loads with the animation flown. Without a display the
 //! session test says it skipped, unless `VPL_REQUIRE_DISPLAY=1` (CI) makes
 //! that a failure; without one the command must say so in one line, exit 2.
 
@@ -45,6 +48,9 @@ struct Layout {
     split_x: Option<usize>,
     overlay: String,
     sides: usize,
+    reference_passes: u32,
+    picked: bool,
+    shadow_map: Option<[usize; 4]>,
 }
 
 fn layout(path: &Path) -> Layout {
@@ -62,6 +68,12 @@ fn layout(path: &Path) -> Layout {
         split_x: (split != "null").then(|| split.parse::<f64>().unwrap().round() as usize),
         overlay: field("overlay").trim_matches('"').to_string(),
         sides: field("sides").matches('"').count() / 2,
+        reference_passes: field("reference_passes").parse().unwrap(),
+        picked: field("picked") != "null",
+        shadow_map: Some(field("shadow_map")).filter(|m| m != "null").map(|m| {
+            let v = nums(m);
+            [v[0].ceil() as usize, v[1].ceil() as usize, v[2].floor() as usize, v[3].floor() as usize]
+        }),
     }
 }
 
@@ -172,6 +184,113 @@ fn a_scripted_session_shows_the_scene_the_split_and_the_overlay() {
         100.0 * right_share
     );
     assert!(after > before + 90, "the overlay splats the VPLs (3×3 each): {before} saturated pixels before, {after} after");
+}
+
+/// Mean of the channels over the view's pixels outside `hole`.
+fn view_mean(p: &Png, view: [usize; 4], hole: Option<[usize; 4]>) -> f64 {
+    let [x0, y0, x1, y1] = view;
+    let inside = |x: usize, y: usize| hole.is_some_and(|[a, b, c, d]| x >= a && x < c && y >= b && y < d);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for y in y0..y1 {
+        for x in x0..x1 {
+            if !inside(x, y) {
+                sum += p.px(x, y).iter().map(|v| *v as f64).sum::<f64>() / 3.0;
+                n += 1;
+            }
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+#[test]
+fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
+    if !has_display() {
+        assert!(std::env::var("VPL_REQUIRE_DISPLAY").is_err(), "VPL_REQUIRE_DISPLAY is set and there is no display");
+        eprintln!("skipped: no display (DISPLAY or WAYLAND_DISPLAY); CI runs this under Xvfb");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = |name: &str| dir.path().join(name);
+    let path_file = dir.path().join("flown").join("office-path.toml");
+    let script = format!(
+        "overlay vpls\nframes 2\nscreenshot {plain}\npick 0.5 0.6\nframes 1\nscreenshot {picked}\n\
+         overlay interleave\nframes 1\nscreenshot {interleave}\noverlay off\npick off\nreference on\nframes 4\n\
+         screenshot {reference}\nshow difference\nframes 1\nscreenshot {difference}\nshow image\nrecord start\n\
+         orbit 25 0\nframes 1\norbit 25 5\nframes 1\nrecord stop {path}\nquit\n",
+        plain = shot("plain").display(),
+        picked = shot("picked").display(),
+        interleave = shot("interleave").display(),
+        reference = shot("reference").display(),
+        difference = shot("difference").display(),
+        path = path_file.display(),
+    );
+    let script_path = dir.path().join("session.txt");
+    std::fs::write(&script_path, script).unwrap();
+    let out = vpl()
+        .args(["view", "--scene", "office", "--window", "800x450", "--vpls", "64"])
+        .arg("--script")
+        .arg(&script_path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "vpl view failed: {stderr}");
+    eprintln!("{stderr}");
+    let png = |n: &str| Png::read(&shot(&format!("{n}.png")));
+    let json = |n: &str| layout(&shot(&format!("{n}.json")));
+    let (plain, picked, interleave, diff_shot) = (png("plain"), png("picked"), png("interleave"), png("difference"));
+    let (lp, lk, li, lr) = (json("plain"), json("picked"), json("interleave"), json("reference"));
+
+    // A picked VPL: ringed, its shadow map inset in the view's corner.
+    assert!(!lp.picked && lp.shadow_map.is_none());
+    assert!(lk.picked, "pick 0.5 0.6 picks the VPL nearest the point");
+    let map = lk.shadow_map.expect("the shadow map is shown");
+    let [mx0, my0, mx1, my1] = map;
+    assert!(mx1 > mx0 + 40 && my1 > my0 + 40 && mx1 <= lk.view[2] && my1 <= lk.view[3], "the map inside the view: {map:?}");
+    let (map_change, _) = difference(&plain, &picked, mx0, mx1, my0, my1);
+    assert!(map_change > 5.0, "the map covers the view's corner: mean |Δ| {map_change:.1}");
+    // The map's corners lie outside the paraboloid's disk: grey (60, 60, 60).
+    let corner = picked.px(mx0 + 3, my0 + 3);
+    assert!(corner.iter().all(|v| (*v as i32 - 60).abs() <= 8), "the map's corner is grey: {corner:?}");
+    let magenta = |p: &Png| (0..p.h).flat_map(|y| (0..p.w).map(move |x| (x, y))).filter(|&(x, y)| p.px(x, y) == [255, 0, 255]).count();
+    assert!(magenta(&picked) > magenta(&plain) + 100, "the pick's ring and the map's frame are drawn");
+
+    // The interleaving pattern with a VPL picked: only its class (1 pixel of
+    // 16) keeps its brightness, the rest is dimmed to a quarter.
+    assert_eq!(li.overlay, "interleave");
+    let (m_plain, m_inter) = (view_mean(&plain, lp.view, Some(map)), view_mean(&interleave, li.view, Some(map)));
+    assert!(m_inter < 0.6 * m_plain, "the pattern dims the other classes: mean {m_inter:.1} against {m_plain:.1}");
+
+    // The reference: one pass at least for each of the 4 frames waited for.
+    assert!(lr.reference_passes >= 4, "{} reference passes", lr.reference_passes);
+    // The difference: red and blue where the frame is brighter or darker.
+    let [x0, y0, x1, y1] = lr.view;
+    let coloured = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let c = diff_shot.px(x, y);
+            (c[0] as i32).max(c[2] as i32) > 2 * c[1] as i32 + 20
+        })
+        .count();
+    let share = coloured as f64 / ((x1 - x0) * (y1 - y0)) as f64;
+    assert!(share > 0.1, "the difference shows red and blue: {:.1} % of the view", 100.0 * share);
+
+    // The recorded path: a scene file of office whose animation ends where the orbits left the camera.
+    let text = std::fs::read_to_string(&path_file).unwrap();
+    assert!(text.contains("builtin = \"office\""), "{text}");
+    let setup = vpl_core::SceneSetup::load(path_file.to_str().unwrap()).unwrap();
+    let seq = setup.sequence.as_ref().expect("the file has the animation");
+    assert!(seq.camera.len() >= 2, "{} camera keys", seq.camera.len());
+    let (first, last) = (seq.camera[0], *seq.camera.last().unwrap());
+    let office = vpl_core::SceneSetup::load("office").unwrap();
+    assert!((first.origin - office.camera.origin).length() < 1e-3, "the path starts at the scene's camera");
+    assert!((last.origin - first.origin).length() > 0.05 * setup.scene.radius(), "the orbits moved the camera");
+    eprintln!(
+        "map change {map_change:.1}, pattern mean {m_inter:.1} of {m_plain:.1}, {} reference passes, difference coloured {:.1} %, {} camera keys over {:.2} s",
+        lr.reference_passes,
+        100.0 * share,
+        seq.camera.len(),
+        seq.duration
+    );
 }
 
 #[test]

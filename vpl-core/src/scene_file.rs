@@ -5,7 +5,6 @@ use crate::camera::FovAxis;
 #[cfg(feature = "formats")]
 use crate::error::{CoreError, Result};
 use serde::{Deserialize, Serialize};
-#[cfg(feature = "formats")]
 use std::path::Path;
 
 /// The whole file.
@@ -214,6 +213,43 @@ pub struct LightKeySpec {
     pub direction: Option<[f32; 3]>,
 }
 
+/// `p` made absolute against the working folder, with `.` and `..`
+/// resolved without reading the file system (the model need not exist yet).
+fn lexical_absolute(p: &Path) -> std::path::PathBuf {
+    use std::path::Component;
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut out = std::path::PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c.as_os_str()),
+        }
+    }
+    out
+}
+
+/// The path from folder `base` to `target` (both absolute and lexical), or
+/// `None` when they share no root.
+fn relative_path(target: &Path, base: &Path) -> Option<std::path::PathBuf> {
+    use std::path::Component;
+    let (t, b): (Vec<Component>, Vec<Component>) = (target.components().collect(), base.components().collect());
+    if t.first() != b.first() {
+        return None;
+    }
+    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut out = std::path::PathBuf::new();
+    for _ in common..b.len() {
+        out.push("..");
+    }
+    for c in &t[common..] {
+        out.push(c.as_os_str());
+    }
+    Some(out)
+}
+
 fn default_up() -> String {
     "y".into()
 }
@@ -285,6 +321,23 @@ impl SceneFile {
         Self::parse(&text, path)
     }
 
+    /// The description with its model paths (`obj`, `gltf`, `mitsuba`), which
+    /// are relative to the folder `from` (the one the file was read from),
+    /// made relative to the folder `to` (where it will be written), so that
+    /// the copy finds the same model. A path that no relative path leads to
+    /// (another drive) is made absolute. A built-in needs no change.
+    pub fn relocated(mut self, from: &Path, to: &Path) -> SceneFile {
+        let g = &mut self.geometry;
+        for p in [&mut g.obj, &mut g.gltf, &mut g.mitsuba].into_iter().flatten() {
+            // An empty folder is the working one.
+            let dot = |d: &Path| if d.as_os_str().is_empty() { Path::new(".").to_path_buf() } else { d.to_path_buf() };
+            let target = lexical_absolute(&dot(from).join(p.as_str()));
+            let here = lexical_absolute(&dot(to));
+            *p = relative_path(&target, &here).unwrap_or(target).to_string_lossy().into_owned();
+        }
+        self
+    }
+
     /// The TOML text of this description.
     #[cfg(feature = "formats")]
     pub fn to_toml(&self) -> String {
@@ -295,6 +348,18 @@ impl SceneFile {
 #[cfg(all(test, feature = "formats"))]
 mod tests {
     use super::*;
+
+    #[test]
+    fn relocated_paths_lead_to_the_same_model() {
+        let text = "[geometry]\nobj = \"models/box.obj\"\n";
+        let f = SceneFile::parse(text, Path::new("x.toml")).unwrap();
+        let moved = f.clone().relocated(Path::new("/data/scenes"), Path::new("/data/out/seq"));
+        assert_eq!(moved.geometry.obj.as_deref(), Some("../../scenes/models/box.obj"));
+        let same = f.clone().relocated(Path::new("/a/./b/../c"), Path::new("/a/c"));
+        assert_eq!(same.geometry.obj.as_deref(), Some("models/box.obj"));
+        let builtin = SceneFile::parse("[geometry]\nbuiltin = \"cornell\"\n", Path::new("x.toml")).unwrap();
+        assert_eq!(builtin.clone().relocated(Path::new("/a"), Path::new("/b")), builtin);
+    }
 
     #[test]
     fn unknown_keys_are_errors_that_name_the_key() {

@@ -145,12 +145,24 @@ impl SceneSetup {
     }
 
     /// The same scene with the animation `spec` instead of its own (checked
-    /// as a scene file's `[sequence]` is; `vpl export-scene` then writes it).
+    /// as a scene file's `[sequence]` is, and like it in the model's frame:
+    /// `geometry.up` and `geometry.scale` apply; `vpl export-scene` then
+    /// writes it).
     pub fn with_sequence(mut self, spec: SequenceSpec) -> Result<SceneSetup> {
         let n_lights = self.description.lights.as_ref().map_or(0, |l| l.len());
-        self.sequence = Some(sequence_from_spec(&spec, n_lights)?);
+        let frame = ModelFrame::of(&self.description.geometry);
+        self.sequence = Some(sequence_from_spec(&frame.sequence(&spec), n_lights)?);
         self.description.sequence = Some(spec);
         Ok(self)
+    }
+
+    /// [`SceneSetup::with_sequence`] for an animation in the toolkit's
+    /// frame (+Y up, the scene's units), as a viewer records it: the
+    /// description gets it in the model's frame.
+    pub fn with_world_sequence(self, world: SequenceSpec) -> Result<SceneSetup> {
+        let frame = ModelFrame::of(&self.description.geometry);
+        let spec = frame.sequence_back(&world);
+        self.with_sequence(spec)
     }
 
     /// The camera at frame `frame` of the sequence (the scene's camera without one).
@@ -446,6 +458,19 @@ impl ModelFrame {
         c
     }
 
+    fn sequence_back(self, s: &SequenceSpec) -> SequenceSpec {
+        let mut s = s.clone();
+        for k in s.camera.iter_mut() {
+            k.origin = self.point_back(Vec3::from(k.origin)).into();
+            k.target = self.point_back(Vec3::from(k.target)).into();
+        }
+        for k in s.lights.iter_mut() {
+            k.position = k.position.map(|p| self.point_back(Vec3::from(p)).into());
+            k.direction = k.direction.map(|d| self.direction_back(Vec3::from(d)).into());
+        }
+        s
+    }
+
     fn sequence(self, s: &SequenceSpec) -> SequenceSpec {
         let mut s = s.clone();
         for k in s.camera.iter_mut() {
@@ -554,6 +579,44 @@ impl builtin::Builtin {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An animation recorded in the toolkit's frame is written in the
+    /// model's, and reads back as the same animation.
+    #[test]
+    fn a_world_sequence_survives_the_model_frame() {
+        // atrium: one point light, the [[lights]] entry the key moves.
+        let mut file = SceneSetup::builtin("atrium").unwrap().description;
+        file.geometry.up = "z".into();
+        file.geometry.scale = 2.0;
+        file.sequence = None;
+        let setup = SceneSetup::from_file(file, Path::new("")).unwrap();
+        let o = Vec3::new(0.1, 2.0, -3.0);
+        let g = Vec3::new(0.0, 1.0, 0.5);
+        let d = Vec3::new(0.0, -1.0, 0.2).normalize();
+        let key = |t: f32, x: f32| crate::scene_file::CameraKeySpec { t, origin: (o + Vec3::X * x).into(), target: g.into() };
+        let world = SequenceSpec {
+            fps: 10.0,
+            duration: 1.0,
+            camera: vec![key(0.0, 0.0), key(1.0, 1.0)],
+            lights: vec![crate::scene_file::LightKeySpec { light: 0, t: 0.0, position: Some(g.into()), direction: Some(d.into()) }],
+        };
+        let setup = setup.with_world_sequence(world).unwrap();
+        let check = |s: &SceneSetup| {
+            let seq = s.sequence.as_ref().unwrap();
+            let (so, sg) = seq.camera_at(1.0).unwrap();
+            assert!((so - (o + Vec3::X)).length() < 1e-5 && (sg - g).length() < 1e-5, "{so} {sg}");
+            let (p, dir) = seq.light_at(0, 0.0);
+            assert!((p.unwrap() - g).length() < 1e-5 && (dir.unwrap() - d).length() < 1e-5);
+        };
+        check(&setup);
+        let written = setup.description.sequence.as_ref().unwrap();
+        assert_ne!(Vec3::from(written.camera[0].origin), o, "the file holds the model's frame");
+        #[cfg(feature = "formats")]
+        {
+            let again = SceneFile::parse(&setup.to_toml(), Path::new("x.toml")).unwrap();
+            check(&SceneSetup::from_file(again, Path::new("")).unwrap());
+        }
+    }
 
     #[test]
     fn light_specs_become_lights() {

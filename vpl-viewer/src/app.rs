@@ -2,9 +2,11 @@
 //! view, the render thread's jobs and replies, the scripted session.
 
 use crate::camera::FlyCamera;
+use crate::inspect::{self, MapPicture};
+use crate::record::{Pose, Recorder};
 use crate::script::Step;
-use crate::view::{Channel, Composite, Overlay, SideFrame, compose};
-use crate::worker::{self, BackendChoice, Job, Reply, SideResult, SideSpec};
+use crate::view::{Channel, Composite, Look, Overlay, Pick, SideFrame, against_reference, compose, pick_vpl};
+use crate::worker::{self, BackendChoice, Job, Reference, ReferenceSpec, Reply, SideResult, SideSpec};
 use crate::{BackendRequest, Summary, ViewerError, ViewerOptions};
 use std::collections::VecDeque;
 use std::ffi::OsString;
@@ -28,6 +30,10 @@ const HISTORY: usize = 240;
 /// A camera move cancels the frame in flight once it has run this long
 /// (shorter frames finish: flying on a slow backend still shows frames).
 const CANCEL_AFTER: Duration = Duration::from_millis(150);
+/// Time the render thread spends on reference passes after each frame.
+const REFERENCE_BUDGET: Duration = Duration::from_millis(150);
+/// A click picks the VPL nearest to it within this many view pixels.
+const PICK_RADIUS: f32 = 12.0;
 
 /// Wakes the event loop: the render thread has a reply.
 #[derive(Clone, Copy, Debug)]
@@ -62,6 +68,7 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
         .map_err(|e| ViewerError::Render(format!("cannot start the render thread: {e}")))?;
     let scale = options.scale.unwrap_or(default_scale);
     let mut app = App { gfx: None, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
+    app.st.scene_dir = scene_dir(&app.st.scene_spec);
     let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(e.to_string()));
     let App { st, gfx } = app;
     drop(gfx);
@@ -76,6 +83,16 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     match fatal {
         Some(e) => Err(e),
         None => Ok(summary),
+    }
+}
+
+/// The folder a scene's model paths are relative to: a scene file's own,
+/// the working folder for a bare model file or a built-in.
+fn scene_dir(spec: &str) -> PathBuf {
+    let p = Path::new(spec);
+    match p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) {
+        Some(e) if e == "toml" => p.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+        _ => PathBuf::from("."),
     }
 }
 
@@ -246,11 +263,14 @@ impl Gfx {
 /// One side's recent frames, for the plots.
 #[derive(Default)]
 struct History {
-    /// (frame number, total ms, sampling ms, visibility ms, shading ms, VPLs moved, Σ|ΔL|/ΣL).
-    rows: VecDeque<[f64; 7]>,
+    /// (frame number, then the columns of [`History::COLUMNS`]).
+    rows: VecDeque<[f64; 9]>,
 }
 
 impl History {
+    /// What the columns after the frame number hold.
+    const COLUMNS: [&'static str; 8] = ["total", "G-buffer", "sampling", "visibility", "shading", "direct", "VPLs moved", "Σ|ΔL|/ΣL"];
+
     fn push(&mut self, s: &SideResult) {
         // A rebuilt side (another sampler, budget or mode) starts its plot afresh.
         if s.index == 0 {
@@ -260,9 +280,11 @@ impl History {
         self.rows.push_back([
             s.index as f64,
             t.total_ms,
+            t.gbuffer_ms,
             t.sampling_ms,
             t.visibility_ms,
             t.shading_ms,
+            t.direct_ms,
             s.out.moved as f64,
             s.change.unwrap_or(f64::NAN),
         ]);
@@ -280,9 +302,15 @@ fn side(s: &SideResult) -> SideFrame<'_> {
     SideFrame { image: &s.out.image, gbuffer: &s.out.gbuffer, vpls: &s.out.vpls, camera: &s.camera }
 }
 
+/// What a shadow map was rendered for: side, slot, the VPL's position and normal.
+type MapKey = (usize, usize, [f32; 6]);
+
 /// Everything but the window.
 struct State {
     scene_name: String,
+    scene_spec: String,
+    scene_dir: PathBuf,
+    seed: u64,
     names: Vec<String>,
     setup: SceneSetup,
     cam: FlyCamera,
@@ -321,6 +349,15 @@ struct State {
     view_rect: Option<egui::Rect>,
     pixels_per_point: f32,
     history: [History; 2],
+    // The reference, a picked VPL, a recording.
+    reference_on: bool,
+    reference: Option<Reference>,
+    picked: Option<(usize, usize)>,
+    map: Option<(MapKey, MapPicture)>,
+    map_texture: Option<egui::TextureHandle>,
+    map_rect: Option<egui::Rect>,
+    recording: Option<(Instant, Recorder)>,
+    recordings: u32,
     error_line: Option<String>,
     status_line: Option<String>,
     frames_shown: u64,
@@ -353,6 +390,9 @@ impl State {
         let scripted = o.script.is_some();
         State {
             scene_name: setup.scene.name.clone(),
+            scene_spec: o.scene.clone(),
+            scene_dir: PathBuf::from("."),
+            seed: o.seed,
             names: registry.names().into_iter().map(str::to_string).collect(),
             cam: FlyCamera::from_camera(&setup.camera),
             speed: setup.scene.radius().max(1e-3) * 0.5,
@@ -387,6 +427,14 @@ impl State {
             view_rect: None,
             pixels_per_point: 1.0,
             history: [History::default(), History::default()],
+            reference_on: o.reference,
+            reference: None,
+            picked: None,
+            map: None,
+            map_texture: None,
+            map_rect: None,
+            recording: None,
+            recordings: 0,
             error_line: None,
             status_line: None,
             frames_shown: 0,
@@ -490,7 +538,12 @@ impl State {
         };
         let time = self.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim_frame));
         let cancel = Arc::new(AtomicBool::new(false));
-        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone() };
+        let reference = self.reference_on.then_some(ReferenceSpec {
+            mode: self.mode,
+            max_depth: vpl_core::Budget::default().max_depth,
+            budget: REFERENCE_BUDGET,
+        });
+        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone(), reference };
         if self.jobs.send(job).is_ok() {
             self.in_flight = Some((self.generation, cancel, Instant::now()));
         } else {
@@ -512,7 +565,7 @@ impl State {
             };
             let Some((generation, _, _)) = self.in_flight.take() else { continue };
             match reply {
-                Reply::Frame { sides } => {
+                Reply::Frame { sides, reference } => {
                     let now = Instant::now();
                     self.first_frame_at.get_or_insert(now);
                     self.last_frame_at = Some(now);
@@ -526,6 +579,15 @@ impl State {
                     self.last = sides;
                     self.error_line = None;
                     self.recompose = true;
+                    match reference {
+                        Some(Ok(r)) => self.reference = Some(r),
+                        Some(Err(e)) => {
+                            self.reference = None;
+                            self.error_line = Some(e);
+                        }
+                        None => self.reference = None,
+                    }
+                    self.refresh_map();
                 }
                 Reply::Cancelled => {}
                 Reply::Failed(e) => {
@@ -548,7 +610,14 @@ impl State {
         self.recompose = false;
         let Some(left) = self.last.first() else { return };
         let right = self.last.get(1).filter(|r| r.out.image.width == left.out.image.width && r.out.image.height == left.out.image.height);
-        let c = compose(side(left), right.map(side), self.channel, self.overlay, self.exposure);
+        let look = Look {
+            channel: self.channel,
+            overlay: self.overlay,
+            exposure: self.exposure,
+            reference: self.reference.as_ref().map(|r| &r.image),
+            picked: self.pick(),
+        };
+        let c = compose(side(left), right.map(side), &look);
         let image = egui::ColorImage::from_rgba_unmultiplied([c.width as usize, c.height as usize], &c.rgba);
         match &mut self.texture {
             Some(t) => t.set(image, egui::TextureOptions::NEAREST),
@@ -608,6 +677,27 @@ impl State {
                     self.cam.orbit(yaw.to_radians(), pitch.to_radians());
                     self.changed(true);
                 }
+                Step::Reference(on) => self.set_reference(on),
+                Step::Pick(None) => {
+                    self.picked = None;
+                    self.refresh_map();
+                }
+                Step::Pick(Some((fx, fy))) => {
+                    let Some(left) = self.last.first() else { continue };
+                    let (w, h) = (left.out.image.width as f32, left.out.image.height as f32);
+                    self.pick_at(fx * w, fy * h, f32::INFINITY);
+                    if self.picked.is_none() {
+                        self.fail(ViewerError::Render(format!("pick {fx} {fy}: the view shows no VPL")));
+                        return;
+                    }
+                }
+                Step::RecordStart => self.record_start(),
+                Step::RecordStop(path) => {
+                    if let Err(e) = self.record_stop(&path) {
+                        self.fail(e);
+                        return;
+                    }
+                }
                 Step::Screenshot(path) => {
                     self.pending_shot = Some(path);
                     return;
@@ -629,11 +719,135 @@ impl State {
         false
     }
 
+    /// The picked VPL, with the interleaving class that shades with it.
+    fn pick(&self) -> Option<Pick> {
+        let (side, slot) = self.picked?;
+        let s = self.last.get(side)?;
+        // The viewer's renderers shade interleaved (vpl_render's default).
+        Some(Pick { side, slot, class: inspect::interleave_class(slot, s.out.vpls.len(), self.seed) })
+    }
+
+    /// Picks the visible VPL nearest to render pixel `(x, y)` (of the side
+    /// the point lies in) within `radius` render pixels; none when no VPL is
+    /// that near.
+    fn pick_at(&mut self, x: f32, y: f32, radius: f32) {
+        let split = self.composite.as_ref().and_then(|c| c.split_x);
+        let k = match split {
+            Some(sx) if x >= sx as f32 && self.last.len() > 1 => 1,
+            _ => 0,
+        };
+        self.picked = self.last.get(k).and_then(|s| pick_vpl(side(s), x, y, radius)).map(|slot| (k, slot));
+        self.status_line = Some(match self.picked {
+            Some((k, slot)) => format!("picked VPL {slot} of {}", self.last[k].spec.sampler),
+            None => "no VPL near the click".into(),
+        });
+        self.refresh_map();
+        self.recompose = true;
+    }
+
+    /// Renders the picked VPL's shadow map when the VPL is new or moved.
+    fn refresh_map(&mut self) {
+        let Some((k, slot)) = self.picked else {
+            self.map = None;
+            return;
+        };
+        let Some(v) = self.last.get(k).and_then(|s| s.out.vpls.get(slot)).copied() else {
+            self.map = None;
+            return;
+        };
+        let key = (k, slot, [v.y.x, v.y.y, v.y.z, v.n.x, v.n.y, v.n.z]);
+        if self.map.as_ref().is_some_and(|(m, _)| *m == key) {
+            return;
+        }
+        let scene = match self.scene() {
+            Ok(s) => s,
+            Err(e) => {
+                self.error_line = Some(e.to_string());
+                return;
+            }
+        };
+        let vpls = &self.last[k].out.vpls;
+        match inspect::shadow_map(&scene, vpls, slot, vpl_visibility::DEFAULT_RESOLUTION) {
+            Ok(Some(m)) => {
+                self.map = Some((key, m));
+                self.map_texture = None;
+            }
+            Ok(None) => self.map = None,
+            Err(e) => self.error_line = Some(format!("shadow map: {e}")),
+        }
+    }
+
+    fn set_reference(&mut self, on: bool) {
+        self.reference_on = on;
+        if !on {
+            self.reference = None;
+            self.recompose = true;
+        }
+        self.changed(false);
+    }
+
+    /// The camera and the `[[lights]]` entries now.
+    fn pose(&mut self) -> Pose {
+        let lights = match &self.manual_lights {
+            Some(l) => l.clone(),
+            None => self.scene().map_or_else(|_| self.setup.scene.extra_lights(), |s| s.extra_lights()),
+        };
+        let lights = lights
+            .iter()
+            .map(|l| match l {
+                Light::Point { position, .. } => (Some(*position), None),
+                Light::Spot { position, direction, .. } => (Some(*position), Some(*direction)),
+                Light::Directional { direction, .. } => (None, Some(*direction)),
+                _ => (None, None),
+            })
+            .collect();
+        Pose { origin: self.cam.origin, target: self.cam.target(), lights }
+    }
+
+    fn record_start(&mut self) {
+        let fps = self.setup.sequence.as_ref().map_or(30.0, |s| s.fps);
+        let mut r = Recorder::new(fps);
+        r.push(0.0, self.pose());
+        self.recording = Some((Instant::now(), r));
+        self.status_line = Some("recording the camera and the lights".into());
+    }
+
+    /// Ends the recording and writes the scene file with it as its
+    /// animation; model paths are made relative to the file's folder.
+    fn record_stop(&mut self, path: &Path) -> Result<PathBuf, ViewerError> {
+        let Some((start, mut r)) = self.recording.take() else {
+            return Err(ViewerError::Invalid("record stop: nothing is being recorded".into()));
+        };
+        let t = start.elapsed().as_secs_f32();
+        r.push(t, self.pose());
+        let spec = r.finish(t).ok_or_else(|| ViewerError::Invalid("record stop: nothing was recorded".into()))?;
+        let setup = self.setup.clone().with_world_sequence(spec)?;
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).map_err(|e| ViewerError::Write { path: dir.to_path_buf(), reason: e.to_string() })?;
+        let file = setup.description.relocated(&self.scene_dir, dir);
+        let text = format!(
+            "# Recorded by vpl view on {}: {} camera keys, {} light keys.\n{}",
+            self.scene_name,
+            file.sequence.as_ref().map_or(0, |s| s.camera.len()),
+            file.sequence.as_ref().map_or(0, |s| s.lights.len()),
+            file.to_toml()
+        );
+        vpl_core::image::write_atomic(path, text.as_bytes())?;
+        self.status_line = Some(format!("wrote {}", path.display()));
+        Ok(path.to_path_buf())
+    }
+
     /// Advances the animation and the keyboard flight by the time since the last tick.
     fn tick(&mut self, ctx: &egui::Context) {
         let now = Instant::now();
         let dt = (now - self.last_tick).as_secs_f32().min(0.1);
         self.last_tick = now;
+        if self.recording.is_some() {
+            let pose = self.pose();
+            if let Some((start, r)) = &mut self.recording {
+                r.push((now - *start).as_secs_f32(), pose);
+            }
+        }
         if self.playing
             && let Some(seq) = &self.setup.sequence
         {
@@ -775,12 +989,63 @@ impl State {
             }
         });
         ui.horizontal(|ui| {
-            let mut on = self.overlay == Overlay::Vpls;
-            if ui.checkbox(&mut on, "VPLs (colour: flux; ring: moved)").changed() {
-                self.overlay = if on { Overlay::Vpls } else { Overlay::Off };
-                self.recompose = true;
+            ui.label("overlay");
+            for (o, name) in [(Overlay::Off, "off"), (Overlay::Vpls, "VPLs"), (Overlay::Interleave, "interleaving")] {
+                if ui.selectable_label(self.overlay == o, name).clicked() {
+                    self.overlay = o;
+                    self.recompose = true;
+                }
             }
         });
+        ui.label(
+            egui::RichText::new(match self.overlay {
+                Overlay::Off => "click a VPL (VPL overlay) to see its shadow map".to_string(),
+                Overlay::Vpls => "colour: flux against the median (blue ¹⁄₁₀₀×, red 100×); white ring: moved this frame".into(),
+                Overlay::Interleave => "pixel class 4·(y mod 4) + (x mod 4) shades with VPL subset c; a picked VPL lights its class".into(),
+            })
+            .small(),
+        );
+        if let Some(p) = self.pick()
+            && let Some(v) = self.last.get(p.side).and_then(|s| s.out.vpls.get(p.slot)).copied()
+        {
+            let sampler = self.last[p.side].spec.sampler.clone();
+            ui.horizontal(|ui| {
+                ui.label(
+                    egui::RichText::new(format!(
+                        "VPL {} of {}: bounce {}, flux {:.3e}{}",
+                        p.slot,
+                        sampler,
+                        v.bounce,
+                        vpl_core::image::luminance(v.flux),
+                        p.class.map_or(String::new(), |c| format!(", pixel class {c}"))
+                    ))
+                    .small(),
+                );
+                if ui.small_button("unpick").clicked() {
+                    self.picked = None;
+                    self.refresh_map();
+                    self.recompose = true;
+                }
+            });
+        }
+        ui.horizontal(|ui| {
+            let mut on = self.reference_on;
+            if ui.checkbox(&mut on, "reference (path tracer while still)").changed() {
+                self.set_reference(on);
+            }
+        });
+        if let Some(r) = &self.reference {
+            let mut line = format!("reference: {} passes of 1 path per pixel", r.passes);
+            for sd in &self.last {
+                if let Some((ratio, rmse)) = against_reference(&sd.out.image, &r.image) {
+                    line.push_str(&format!(
+                        "\n{}: mean {:.3}× the reference, RMS difference {:.3} of its mean",
+                        sd.spec.sampler, ratio, rmse
+                    ));
+                }
+            }
+            ui.label(egui::RichText::new(line).small());
+        }
         ui.horizontal(|ui| {
             ui.label("show");
             let before = self.channel;
@@ -846,19 +1111,37 @@ impl State {
                 .show(ui, |p| {
                     for (k, h) in history.iter().enumerate().take(names.len()) {
                         for (c, what) in columns {
-                            let label = if what.is_empty() { names[k].clone() } else { format!("{} {what}", names[k]) };
+                            let label =
+                                if what.is_empty() || columns.len() == 1 { names[k].clone() } else { format!("{} {what}", names[k]) };
                             p.line(egui_plot::Line::new(label, h.series(*c)));
                         }
                     }
                 });
         };
-        plot(ui, "ms", "milliseconds per frame (total, sampling)", &[(1, ""), (2, "sampling")], &self.history);
-        plot(ui, "moved", "VPLs moved per frame", &[(5, "")], &self.history);
-        plot(ui, "change", "frame-to-frame change Σ|ΔL|/ΣL", &[(6, "")], &self.history);
+        let stages: Vec<(usize, &str)> = (1..=6).map(|c| (c, History::COLUMNS[c - 1])).collect();
+        plot(ui, "ms", "milliseconds per stage", &stages, &self.history);
+        plot(ui, "moved", "VPLs moved per frame", &[(7, "")], &self.history);
+        plot(ui, "change", "frame-to-frame change Σ|ΔL|/ΣL", &[(8, "")], &self.history);
         ui.separator();
-        if ui.button("screenshot (PNG, EXR)").clicked() {
-            self.shots += 1;
-            self.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.shots)));
+        ui.horizontal(|ui| {
+            if ui.button("screenshot (PNG, EXR)").clicked() {
+                self.shots += 1;
+                self.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.shots)));
+            }
+            if self.recording.is_none() {
+                if ui.button("record path").clicked() {
+                    self.record_start();
+                }
+            } else if ui.button("stop, write scene file").clicked() {
+                self.recordings += 1;
+                let path = PathBuf::from(format!("vpl-view-{}-path-{}.toml", self.scene_name, self.recordings));
+                if let Err(e) = self.record_stop(&path) {
+                    self.error_line = Some(e.to_string());
+                }
+            }
+        });
+        if let Some((start, r)) = &self.recording {
+            ui.label(egui::RichText::new(format!("recording: {:.1} s, {} keys", start.elapsed().as_secs_f32(), r.len())).small());
         }
         ui.label(
             egui::RichText::new("left drag: orbit · right drag: look · WASD QE: fly · wheel: dolly · Ctrl+drag: move the light").small(),
@@ -913,6 +1196,37 @@ impl State {
                 self.changed(false);
             }
         }
+        // A click (no drag) picks the VPL nearest to it.
+        if response.clicked()
+            && let Some(pos) = response.interact_pointer_pos()
+            && let Some((cw, ch)) = self.composite.as_ref().map(|c| (c.width as f32, c.height as f32))
+        {
+            let x = (pos.x - rect.min.x) / rect.width().max(1.0) * cw;
+            let y = (pos.y - rect.min.y) / rect.height().max(1.0) * ch;
+            let radius = PICK_RADIUS * cw / (rect.width() * self.pixels_per_point).max(1.0);
+            self.pick_at(x, y, radius);
+        }
+        // The picked VPL's shadow map, in the view's lower right corner.
+        self.map_rect = None;
+        if let Some((_, m)) = &self.map {
+            let texture = self.map_texture.get_or_insert_with(|| {
+                let image = egui::ColorImage::from_rgba_unmultiplied([m.res as usize, m.res as usize], &m.rgba);
+                ui.ctx().load_texture("vpl-view shadow map", image, egui::TextureOptions::NEAREST)
+            });
+            let side = (rect.height() * 0.4).min(rect.width() * 0.4).min(256.0);
+            let inset = egui::Rect::from_min_size(rect.max - egui::vec2(side + 8.0, side + 8.0), egui::vec2(side, side));
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter().image(texture.id(), inset, uv, egui::Color32::WHITE);
+            ui.painter().rect_stroke(inset, 0.0, egui::Stroke::new(2.0, egui::Color32::from_rgb(255, 0, 255)), egui::StrokeKind::Outside);
+            ui.painter().text(
+                inset.left_top() - egui::vec2(0.0, 2.0),
+                egui::Align2::LEFT_BOTTOM,
+                format!("shadow map of VPL {} ({}², paraboloid)", self.picked.map_or(0, |p| p.1), m.res),
+                egui::FontId::proportional(12.0),
+                egui::Color32::from_rgb(255, 0, 255),
+            );
+            self.map_rect = Some(inset);
+        }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
@@ -947,7 +1261,7 @@ impl State {
         let sides: Vec<String> = self.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
         let res = self.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
         let json = format!(
-            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {}\n}}\n",
+            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {},\n  \"reference_passes\": {},\n  \"picked\": {},\n  \"shadow_map\": {}\n}}\n",
             view[0],
             view[1],
             view[2],
@@ -957,11 +1271,17 @@ impl State {
             res.1,
             sides.join(", "),
             self.channel.name(),
-            match self.overlay {
-                Overlay::Off => "off",
-                Overlay::Vpls => "vpls",
-            },
-            self.frames_shown
+            self.overlay.name(),
+            self.frames_shown,
+            self.reference.as_ref().map_or(0, |r| r.passes),
+            self.picked.map_or("null".to_string(), |(k, slot)| format!("[{k}, {slot}]")),
+            self.map_rect.map_or("null".to_string(), |r| format!(
+                "[{:.1}, {:.1}, {:.1}, {:.1}]",
+                r.min.x * ppp,
+                r.min.y * ppp,
+                r.max.x * ppp,
+                r.max.y * ppp
+            ))
         );
         let j = with(".json");
         vpl_core::image::write_atomic(&j, json.as_bytes())?;

@@ -9,7 +9,11 @@
 //! (coloured by flux, those that moved this frame ringed), look at
 //! G-buffer channels, and watch per-stage milliseconds, VPLs moved and the
 //! frame-to-frame change Σ|ΔL|/ΣL (what the SMC paper's |E′| measures) in
-//! live plots.
+//! live plots. While the camera stands still the path tracer accumulates a
+//! reference, shown beside the frames or as their difference against it;
+//! a clicked VPL shows its shadow map and, over the interleaving pattern,
+//! the pixels it shades; the camera-and-light path of a session is
+//! recorded as a scene file with an animation.
 //!
 //! `vpl view --scene office` is this crate's [`run`]; a program with its
 //! own samplers calls it with its registry:
@@ -27,14 +31,14 @@
 //! ```
 //! use vpl_core::SceneSetup;
 //! use vpl_render::Renderer;
-//! use vpl_viewer::view::{compose, Channel, Overlay, SideFrame};
+//! use vpl_viewer::view::{compose, Channel, Look, Overlay, SideFrame};
 //!
 //! let setup = SceneSetup::load("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((24, 24)).unwrap();
 //! let mut r = Renderer::builder(&setup.scene).vpls(16).build().unwrap();
 //! let out = r.render(&setup.scene, &camera, 0, 0.0).unwrap();
 //! let side = SideFrame { image: &out.image, gbuffer: &out.gbuffer, vpls: &out.vpls, camera: &camera };
-//! let view = compose(side, Some(side), Channel::Image, Overlay::Vpls, 1.0);
+//! let view = compose(side, Some(side), &Look { channel: Channel::Image, overlay: Overlay::Vpls, ..Look::image() });
 //! assert_eq!(view.split_x, Some(12));
 //! assert_eq!(view.rgba.len(), 24 * 24 * 4);
 //!
@@ -48,13 +52,16 @@
 //! right button to look around; W A S D fly, Q E down and up (Shift: faster);
 //! the wheel dollies toward the point looked at; Ctrl + left drag moves the
 //! scene's first point or spot light in the view plane (a directional light
-//! turns). A scene with an animation plays, pauses and scrubs on the panel.
+//! turns). A click picks the VPL nearest to it. A scene with an animation
+//! plays, pauses and scrubs on the panel.
 
 #![warn(missing_docs)]
 
 mod app;
 pub mod camera;
 mod error;
+pub mod inspect;
+pub mod record;
 pub mod script;
 pub mod view;
 pub mod worker;
@@ -101,6 +108,9 @@ pub struct ViewerOptions {
     pub seed: u64,
     /// Exposure of the tone mapping.
     pub exposure: f32,
+    /// Accumulate the path tracer's reference while the camera stands still
+    /// from the start (the panel turns it on and off).
+    pub reference: bool,
     /// A scripted session: the viewer runs it and closes (see [`script`]).
     pub script: Option<Script>,
 }
@@ -119,6 +129,7 @@ impl ViewerOptions {
             mode: Mode::Full,
             seed: 0,
             exposure: 1.0,
+            reference: false,
             script: None,
         }
     }

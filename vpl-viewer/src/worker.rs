@@ -2,13 +2,18 @@
 //! keeps its sampler's, visibility's and shader's state from frame to
 //! frame), renders the frames the window asks for, and stops a frame at
 //! its next stage boundary when the window asks for another (the camera
-//! moved). The window never waits on it.
+//! moved). The window never waits on it. While the camera stands still it
+//! also accumulates a reference with the path tracer, a pass of one path
+//! per pixel at a time, after each frame's sides.
 
 use crate::view::temporal_change;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
+use std::time::{Duration, Instant};
+use vpl_core::glam::Vec3;
 use vpl_core::{Camera, Image, Mode, Scene};
+use vpl_pathtrace::{PathTracer, RenderSettings};
 use vpl_render::{Backend, FrameOutput, RenderError, Renderer};
 use vpl_sampling::Registry;
 
@@ -39,6 +44,30 @@ pub struct Job {
     pub sides: Vec<SideSpec>,
     /// Set by the window to stop this frame at its next stage boundary.
     pub cancel: Arc<AtomicBool>,
+    /// Accumulate the reference after the sides.
+    pub reference: Option<ReferenceSpec>,
+}
+
+/// The reference a job asks for: the path tracer's estimate of what the
+/// sides converge to, accumulated pass by pass while the camera, the lights
+/// and the mode stay as they are (any change starts it afresh).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReferenceSpec {
+    /// Which light paths it includes (the sides' mode).
+    pub mode: Mode,
+    /// Longest path in segments (the VPL budget's, 5 by default).
+    pub max_depth: u32,
+    /// Passes run after the sides until this much time has gone (at least one).
+    pub budget: Duration,
+}
+
+/// The reference accumulated so far.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// Mean of the passes.
+    pub image: Image,
+    /// Passes of one path per pixel in the mean.
+    pub passes: u32,
 }
 
 /// One side's frame.
@@ -61,6 +90,9 @@ pub enum Reply {
     Frame {
         /// The sides, in the job's order.
         sides: Vec<SideResult>,
+        /// The reference, when the job asked for one (an error line when a
+        /// pass failed).
+        reference: Option<Result<Reference, String>>,
     },
     /// The job was cancelled.
     Cancelled,
@@ -88,6 +120,21 @@ impl BackendChoice {
     }
 }
 
+/// The path tracer's running sum, and what it is a sum for.
+struct Accumulation {
+    camera: Camera,
+    scene: Arc<Scene>,
+    spec: (Mode, u32),
+    sum: Vec<Vec3>,
+    passes: u32,
+}
+
+impl Accumulation {
+    fn matches(&self, job: &Job, spec: &ReferenceSpec) -> bool {
+        self.camera == job.camera && Arc::ptr_eq(&self.scene, &job.scene) && self.spec == (spec.mode, spec.max_depth)
+    }
+}
+
 struct Side {
     spec: SideSpec,
     renderer: Renderer,
@@ -99,17 +146,23 @@ struct Side {
 /// reply so the window redraws.
 pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, backend: BackendChoice, seed: u64, wake: impl Fn()) {
     let mut sides: Vec<Option<Side>> = Vec::new();
+    let mut accumulation: Option<Accumulation> = None;
     // One reply per job: the window sends the next job when this one is answered.
     while let Ok(job) = jobs.recv() {
         // A panic in a stage must not leave the window waiting for a reply
         // that never comes: it is a failed frame, and the sides start afresh.
-        let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| render_job(&job, &mut sides, &registry, &backend, seed)));
+        let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let frame = render_job(&job, &mut sides, &registry, &backend, seed)?;
+            let reference = job.reference.map(|spec| accumulate(&job, &spec, &mut accumulation, seed));
+            Ok((frame, reference))
+        }));
         let reply = match reply {
-            Ok(Ok(sides)) => Reply::Frame { sides },
+            Ok(Ok((sides, reference))) => Reply::Frame { sides, reference },
             Ok(Err(None)) => Reply::Cancelled,
             Ok(Err(Some(e))) => Reply::Failed(e),
             Err(panic) => {
                 sides.clear();
+                accumulation = None;
                 let what = panic
                     .downcast_ref::<&str>()
                     .map(|s| s.to_string())
@@ -123,6 +176,51 @@ pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, back
         }
         wake();
     }
+}
+
+/// Runs reference passes for `job` until its budget is spent or it is
+/// cancelled (a pass cut short is dropped), and answers the mean so far.
+fn accumulate(job: &Job, spec: &ReferenceSpec, acc: &mut Option<Accumulation>, seed: u64) -> Result<Reference, String> {
+    if acc.as_ref().is_none_or(|a| !a.matches(job, spec)) {
+        let pixels = (job.camera.resolution.0 * job.camera.resolution.1) as usize;
+        *acc = Some(Accumulation {
+            camera: job.camera.clone(),
+            scene: job.scene.clone(),
+            spec: (spec.mode, spec.max_depth),
+            sum: vec![Vec3::ZERO; pixels],
+            passes: 0,
+        });
+    }
+    let a = acc.as_mut().expect("made above");
+    let pt = PathTracer::new(spec.max_depth, spec.mode);
+    let start = Instant::now();
+    loop {
+        // Pass p draws the streams of frame p: the mean after n passes is
+        // the same bits however the passes fell between frames.
+        let settings = RenderSettings { spp: 1, seed, frame: a.passes as u64 };
+        match vpl_pathtrace::render_cancellable(&job.scene, &job.camera, &pt, settings, &|_, _| {}, &job.cancel) {
+            Ok(out) => {
+                for (s, v) in a.sum.iter_mut().zip(&out.image.data) {
+                    *s += *v;
+                }
+                a.passes += 1;
+            }
+            Err(vpl_pathtrace::RenderError::Cancelled) => break,
+            Err(e) => {
+                *acc = None;
+                return Err(format!("reference: {e}"));
+            }
+        }
+        if start.elapsed() >= spec.budget || job.cancel.load(Ordering::Relaxed) {
+            break;
+        }
+    }
+    let mut image = Image::new(job.camera.resolution.0, job.camera.resolution.1);
+    let inv = 1.0 / a.passes.max(1) as f32;
+    for (p, s) in image.data.iter_mut().zip(&a.sum) {
+        *p = *s * inv;
+    }
+    Ok(Reference { image, passes: a.passes })
 }
 
 /// `Err(None)`: cancelled; `Err(Some(line))`: failed.

@@ -46,8 +46,12 @@ pub(super) struct Args {
     /// Exposure of the tone mapping.
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     exposure: f32,
+    /// Accumulate a path-traced reference while the camera stands still (also on the panel).
+    #[arg(long)]
+    reference: bool,
     /// Run a scripted session from this file and close (see the vpl-viewer crate's `script`
-    /// module: frames, sampler, split, overlay, show, mode, vpls, orbit, screenshot, quit).
+    /// module: frames, sampler, split, overlay, show, mode, vpls, orbit, reference, pick, record,
+    /// screenshot, quit).
     #[arg(long)]
     script: Option<PathBuf>,
     /// No summary line at the end.
@@ -58,7 +62,7 @@ pub(super) struct Args {
 /// Runs `vpl view`.
 #[cfg(feature = "viewer")]
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
-    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, script, quiet } = args;
+    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, reference, script, quiet } = args;
     let script = match script {
         Some(p) => {
             let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
@@ -84,6 +88,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         mode: mode_of(mode),
         seed,
         exposure,
+        reference,
         script,
     };
     let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;

@@ -1,10 +1,12 @@
 //! The k-nearest-neighbour density estimator of eq. (7).
 
+use crate::accepted::AcceptTree;
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::num::NonZero;
+use std::sync::OnceLock;
 
 /// Errors of [`KnnDensity`].
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -35,6 +37,8 @@ pub fn rendering_k(budget: usize) -> usize {
 pub struct KnnDensity {
     points: Vec<[f32; 3]>,
     tree: Option<ImmutableKdTree<f32, 3>>,
+    /// The tree of predicate queries, built by the first of them.
+    accepted: OnceLock<AcceptTree>,
 }
 
 impl std::fmt::Debug for KnnDensity {
@@ -56,7 +60,7 @@ impl KnnDensity {
             // Only fails on an empty slice.
             ImmutableKdTree::new_from_slice(&points).ok()
         };
-        Ok(KnnDensity { points, tree })
+        Ok(KnnDensity { points, tree, accepted: OnceLock::new() })
     }
 
     /// Number of points N.
@@ -118,48 +122,25 @@ impl KnnDensity {
     }
 
     /// The nearest point of the set to `q` that `accept` takes (by index),
-    /// other than `skip`, as (index, squared distance): the 2 nearest are
-    /// looked at first, then the 16, 64 and 512 nearest; `None` when none
-    /// of those is accepted.
+    /// other than `skip`, as (index, squared distance), among its 512
+    /// nearest; `None` when none of those is accepted
+    /// ([`KnnDensity::nearest_accepted_n`]).
     pub fn nearest_accepted(&self, q: Vec3, skip: Option<usize>, accept: impl Fn(usize) -> bool) -> Option<(usize, f32)> {
         self.nearest_accepted_n(q, skip, accept, 1).into_iter().next()
     }
 
     /// Up to `m` nearest points of the set to `q` that `accept` takes,
-    /// other than `skip`, nearest first, among its 512 nearest (looked at
-    /// in rounds of 2m, 16m, 64m and 512).
+    /// other than `skip`, nearest first, among its 512 nearest (`skip`
+    /// counted among them; a point tied with the 512th distance too). Ties
+    /// in distance go to the lower index. The first call builds a second
+    /// tree that skips what `accept` refuses instead of ranking it (see
+    /// `accepted.rs`).
     pub fn nearest_accepted_n(&self, q: Vec3, skip: Option<usize>, accept: impl Fn(usize) -> bool, m: usize) -> Vec<(usize, f32)> {
-        let mut out = Vec::new();
-        let Some(tree) = self.tree.as_ref().filter(|_| m > 0) else { return out };
-        let q = q.to_array();
-        if m == 1 && skip.is_none() {
-            // The common case first: the nearest point is accepted.
-            let n = tree.query(&q).nearest_one::<SquaredEuclidean<f32>>().execute();
-            if accept(n.item as usize) {
-                out.push((n.item as usize, n.distance));
-                return out;
-            }
+        if m == 0 || self.points.is_empty() {
+            return Vec::new();
         }
-        let mut seen = 0;
-        for k in [(2 * m).max(2), 16 * m, 64 * m, 512] {
-            let k = k.max(seen + 1).min(self.points.len());
-            let Some(kk) = NonZero::new(k) else { break };
-            let found = tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(kk).execute();
-            for f in found.iter().skip(seen) {
-                let j = f.item as usize;
-                if Some(j) != skip && accept(j) {
-                    out.push((j, f.distance));
-                    if out.len() == m {
-                        return out;
-                    }
-                }
-            }
-            if k == self.points.len() {
-                break;
-            }
-            seen = k;
-        }
-        out
+        let tree = self.accepted.get_or_init(|| AcceptTree::new(&self.points));
+        tree.nearest_accepted(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
     }
 
     /// Every point of the set within squared distance `r2` of `q`, as
@@ -170,25 +151,14 @@ impl KnnDensity {
     }
 
     /// The nearest *other* point of every point of the set, as (index,
-    /// squared distance), in the order the points were given; `None` for a
-    /// set of one point.
+    /// squared distance), in the order the points were given (ties in
+    /// distance to the lower index); `None` for a set of one point.
     pub fn member_nearest(&self) -> Vec<Option<(usize, f32)>> {
         let n = self.points.len();
-        let (Some(tree), Some(two)) = (self.tree.as_ref(), NonZero::new(2).filter(|_| n >= 2)) else {
+        if n < 2 {
             return vec![None; n];
-        };
-        self.points
-            .par_iter()
-            .enumerate()
-            .map(|(i, q)| {
-                tree.query(q)
-                    .nearest_n::<SquaredEuclidean<f32>>(two)
-                    .execute()
-                    .iter()
-                    .map(|f| (f.item as usize, f.distance))
-                    .find(|(j, _)| *j != i)
-            })
-            .collect()
+        }
+        self.accepted.get_or_init(|| AcceptTree::new(&self.points)).members_nearest()
     }
 
     /// Density at every point of the set from its `k` nearest other points,
@@ -211,6 +181,9 @@ pub fn set_densities(points: &[Vec3], k: usize, area: f32) -> Vec<f32> {
     }
     KnnDensity::new(points).map(|d| d.members(k)).unwrap_or_else(|_| vec![0.0; n])
 }
+
+/// How many of a query's nearest points the predicate queries look among.
+const ACCEPT_AMONG: usize = 512;
 
 /// `k / (n π r²)`: infinite at r = 0, zero at r = ∞.
 #[inline]

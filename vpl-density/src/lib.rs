@@ -11,7 +11,9 @@
 //! k-th nearest neighbour, found by an unconstrained 3D search that assumes
 //! the neighbours lie on y's (planar) surface, as photon mapping does. The
 //! k-d tree is kiddo's; its distances are squared, which is what the formula
-//! needs.
+//! needs. Queries with a predicate, and each point's nearest other point,
+//! walk a second tree of this crate's own, built by the first of them, that
+//! skips the points the predicate refuses instead of ranking them.
 //!
 //! - [`KnnDensity::at`]: the density of the set at any point (a candidate
 //!   against the current VPLs; k = 1 there, so candidates near a VPL look
@@ -26,7 +28,8 @@
 //!   rendered VPLs (eq. 8): k → ∞ and k/I → 0 as I grows, which makes the
 //!   estimate consistent; k = 8 at I = 2048.
 //!
-//! Every query depends only on the set of points, not on their order.
+//! Every query depends only on the set of points, not on their order, but
+//! for ties in distance (the predicate queries give them to the lower index).
 //!
 //! ```
 //! use glam::Vec3;
@@ -59,6 +62,7 @@
 
 #![warn(missing_docs)]
 
+mod accepted;
 mod knn;
 
 pub use knn::{DensityError, KnnDensity, rendering_k, set_densities};

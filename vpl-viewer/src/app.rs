@@ -43,16 +43,25 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     let mut setup = SceneSetup::load(&options.scene)?;
     // The VPL pipeline draws each material's diffuse albedo.
     setup.scene = setup.scene.with_material_policy(MaterialPolicy::Diffuse);
+    // The window system, before anything loads a window-system or GPU
+    // library (either may print its own lines to stderr).
+    #[cfg(target_os = "linux")]
+    let system = crate::display::from_env().map_err(ViewerError::NoDisplay)?;
     let (backend, renderer_line, default_scale) = choose_backend(options.backend)?;
     let mut builder = EventLoop::<Wake>::with_user_event();
     // A library call may come from any thread (a test, a notebook's worker);
     // X11 and Wayland allow it (macOS does not: call from the main thread there).
     #[cfg(target_os = "linux")]
     {
-        winit::platform::x11::EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
-        winit::platform::wayland::EventLoopBuilderExtWayland::with_any_thread(&mut builder, true);
+        use winit::platform::{wayland::EventLoopBuilderExtWayland, x11::EventLoopBuilderExtX11};
+        EventLoopBuilderExtX11::with_any_thread(&mut builder, true);
+        EventLoopBuilderExtWayland::with_any_thread(&mut builder, true);
+        match system {
+            crate::display::WindowSystem::Wayland => builder.with_wayland(),
+            crate::display::WindowSystem::X11 => builder.with_x11(),
+        };
     }
-    let event_loop = builder.build().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    let event_loop = builder.build().map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)))?;
     let proxy = event_loop.create_proxy();
     let (jobs, job_rx) = mpsc::channel::<Job>();
     let (reply_tx, replies) = mpsc::channel::<Reply>();
@@ -69,7 +78,7 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     let scale = options.scale.unwrap_or(default_scale);
     let mut app = App { gfx: None, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
     app.st.scene_dir = scene_dir(&app.st.scene_spec);
-    let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(e.to_string()));
+    let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)));
     let App { st, gfx } = app;
     drop(gfx);
     if let Some((_, cancel, _)) = &st.in_flight {
@@ -136,7 +145,7 @@ struct Gfx {
 impl Gfx {
     fn new(el: &ActiveEventLoop, size: (u32, u32), title: &str) -> Result<Gfx, ViewerError> {
         let attrs = Window::default_attributes().with_title(title).with_inner_size(winit::dpi::PhysicalSize::new(size.0, size.1));
-        let window = Arc::new(el.create_window(attrs).map_err(|e| ViewerError::NoDisplay(e.to_string()))?);
+        let window = Arc::new(el.create_window(attrs).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)))?);
         let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY | wgpu::Backends::GL);
         let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends, ..Default::default() });
         let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Surface(e.to_string()))?;

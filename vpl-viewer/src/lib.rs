@@ -59,6 +59,7 @@
 
 mod app;
 pub mod camera;
+mod display;
 mod error;
 pub mod inspect;
 pub mod record;

@@ -10,7 +10,9 @@
 //!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
 //!   tracing, the figures and Georgiev's experiment stay on the CPU.
 //! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
-//! - `cargo xtask test`: the whole test suite, as CI runs it.
+//! - `cargo xtask test [--cargo-test] [ARGS]`: the whole test suite, as CI runs it: under
+//!   cargo-nextest when it is installed, with the 15 slowest tests and their times, then the
+//!   doctests; `cargo test --workspace` otherwise (module `test`).
 //! - `cargo xtask bench-pt`: path-tracing throughput on `cornell`.
 //! - `cargo xtask bench-rays`: BVH build time and memory, and rays per second (primary and diffuse
 //!   closest hits, shadow occlusion) on `cornell`, Dabrovic's Sponza and five Sponzas side by side.
@@ -22,6 +24,8 @@
 //!   fuzz targets (`tests/src/fuzz.rs`) for N seconds (default 600) in the `fuzz` profile (release
 //!   speed with debug assertions and overflow checks); prints the
 //!   executions and findings, writes findings to `target/fuzz-findings/`.
+
+mod test;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -138,7 +142,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
-     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
 
@@ -147,7 +151,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => reproduce(&args[1..]),
         Some("merge") => merge(&args[1..]),
-        Some("test") => test(&args[1..]),
+        Some("test") => test::test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
         Some("bench-rays") => bench_rays(&args[1..]),
@@ -181,12 +185,6 @@ fn target_dir() -> Result<PathBuf, String> {
     }
     let meta: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|e| format!("cargo metadata: {e}"))?;
     meta["target_directory"].as_str().map(PathBuf::from).ok_or_else(|| "cargo metadata: no target_directory".to_string())
-}
-
-fn test(args: &[String]) -> Result<(), String> {
-    let mut c = cargo();
-    c.args(["test", "--workspace", "--no-fail-fast"]).args(args);
-    run(c, "cargo test")
 }
 
 fn fuzz(args: &[String]) -> Result<(), String> {

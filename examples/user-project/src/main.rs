@@ -1,32 +1,11 @@
-//! A user's experiment: the uniform-by-area sampler of the toolkit's
-//! `user_sampler` example, registered beside the built-in samplers, run
-//! through the renderer library, and, with `--features cli`, through the
-//! toolkit's command line.
-//!
-//! `cargo run` renders three frames of `office` with it and with SMC;
-//! `cargo run --features cli -- render --scene cornell --method vpl --sampler uniform-area`
-//! is the `vpl` command with this project's registry.
+//! Three frames of `office` rendered with this project's uniform-by-area
+//! sampler and with SMC, through the renderer library.
 
-#[path = "../../../vpl-bench/examples/user_sampler/uniform_area.rs"]
-mod uniform_area;
-
-use vpl_render::Registry;
-
-fn registry() -> Registry {
-    Registry::builtin().with(uniform_area::UniformArea::entry()).expect("the name is free")
-}
-
-#[cfg(feature = "cli")]
-fn main() {
-    vpl_bench::cli::main(&registry())
-}
-
-#[cfg(not(feature = "cli"))]
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     use vpl_render::vpl_core::{Mode, SceneSetup};
     use vpl_render::{Renderer, VisibilitySpec};
 
-    let registry = registry();
+    let registry = my_vpl_experiment::registry();
     let setup = SceneSetup::load("office")?;
     for sampler in ["uniform-area", "smc"] {
         let mut renderer = Renderer::builder(&setup.scene)

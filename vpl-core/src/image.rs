@@ -200,9 +200,34 @@ pub fn remove_temporaries() {
     }
 }
 
-/// The temporary name of a write of `name` by process `pid`: `.NAME.PID.tmp`.
+/// The longest file name the temporaries are given, in bytes: the limit of
+/// every common file system (ext4, XFS, btrfs, tmpfs, APFS, NTFS).
+const MAX_NAME_BYTES: usize = 255;
+
+/// The temporary name of a write of `name` by process `pid`:
+/// [`temporary_stem`]`PID.tmp`.
 fn temporary_name(name: &str, pid: u32) -> String {
-    format!(".{name}.{pid}.tmp")
+    format!("{}{pid}.tmp", temporary_stem(name))
+}
+
+/// What every temporary of `name` starts with: `.NAME.`, or, where a
+/// temporary of that form could pass [`MAX_NAME_BYTES`] (a legal name of
+/// 246 bytes and more), `NAME` cut at a character boundary and followed by
+/// `~` and a 64-bit FNV-1a hash of the whole name, so that two long names
+/// with the same beginning keep apart.
+fn temporary_stem(name: &str) -> String {
+    // '.' + name + '.' + a PID of at most 10 digits + ".tmp"
+    const SPARE: usize = 1 + 1 + 10 + 4;
+    if name.len() + SPARE <= MAX_NAME_BYTES {
+        return format!(".{name}.");
+    }
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3));
+    // '~' and 16 hex digits take 17 bytes more.
+    let mut keep = MAX_NAME_BYTES - SPARE - 17;
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    format!(".{}~{hash:016x}.", &name[..keep])
 }
 
 /// Removes `.NAME.PID.tmp` files beside `NAME` left by writes of processes
@@ -214,7 +239,7 @@ fn remove_stale_temporaries(dir: &Path, name: &str) {
         return;
     }
     let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let prefix = format!(".{name}.");
+    let prefix = temporary_stem(name);
     for e in entries.flatten() {
         let file = e.file_name().to_string_lossy().into_owned();
         let Some(pid) = file.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".tmp")).and_then(|p| p.parse::<u32>().ok()) else {
@@ -230,6 +255,11 @@ fn remove_stale_temporaries(dir: &Path, name: &str) {
 /// directory, flushed, then renamed over `path`. On failure nothing is left
 /// behind; the temporary is registered for [`remove_temporaries`] while it
 /// exists, and stale temporaries of the same output are removed first.
+///
+/// `path` must be a new name or a regular file: a device, a FIFO, a
+/// socket, a directory or a symbolic link is refused before anything is
+/// written, since the rename would put a regular file in its place (an
+/// output named `/dev/null`, run as root, would replace the system's).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let err = |reason: String| CoreError::Write { path: path.into(), reason };
     let dir = match path.parent() {
@@ -239,6 +269,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     if !dir.is_dir() {
         return Err(err(format!("directory {} does not exist", dir.display())));
     }
+    check_replaceable(path)?;
     let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
     remove_stale_temporaries(&dir, &name);
     let tmp = dir.join(temporary_name(&name, std::process::id()));
@@ -254,6 +285,25 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != &tmp);
     result.map_err(|e| err(e.to_string()))
+}
+
+/// Refuses an output path that exists and is no regular file (see
+/// [`write_atomic`]). A symbolic link is refused whatever it points to: the
+/// rename would replace the link, not write where it points.
+pub fn check_replaceable(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(CoreError::Write { path: path.into(), reason: e.to_string() }),
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) => {
+            let t = meta.file_type();
+            let kind = if t.is_symlink() { "a symbolic link".to_string() } else { crate::input::kind_of(&meta).to_string() };
+            Err(CoreError::Write {
+                path: path.into(),
+                reason: format!("it is {kind}; an output replaces only a regular file or takes a new name"),
+            })
+        }
+    }
 }
 
 #[cfg(test)]
@@ -323,6 +373,63 @@ mod tests {
         let mine = dir.join(temporary_name("a.exr", std::process::id()));
         assert!(!mine.exists() && !IN_FLIGHT.lock().unwrap().contains(&mine));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A legal name of 250 bytes (the limit is 255) is written, its
+    /// temporary kept within the limit, and a stale temporary of it found.
+    #[test]
+    fn long_names_are_written_and_their_temporaries_fit() {
+        let dir = tempfile::tempdir().unwrap();
+        for len in [240, 246, 250, 255] {
+            let name = format!("{}.exr", "é".repeat((len - 4) / 2) + &"a".repeat((len - 4) % 2));
+            assert_eq!(name.len(), len);
+            for pid in [1, u32::MAX] {
+                assert!(temporary_name(&name, pid).len() <= MAX_NAME_BYTES, "{len}");
+            }
+            write_atomic(&dir.path().join(&name), b"whole").unwrap();
+            assert_eq!(std::fs::read(dir.path().join(&name)).unwrap(), b"whole");
+        }
+        // Two long names alike up to the cut keep apart.
+        let (a, b) = ("x".repeat(250) + "1", "x".repeat(250) + "2");
+        assert_ne!(temporary_stem(&a), temporary_stem(&b));
+        #[cfg(unix)]
+        {
+            let name = "y".repeat(250);
+            let dead = dir.path().join(temporary_name(&name, 4_194_304));
+            std::fs::write(&dead, b"partial").unwrap();
+            write_atomic(&dir.path().join(&name), b"whole").unwrap();
+            assert!(!dead.exists(), "the dead writer's temporary of a long name stays");
+        }
+        let names: Vec<String> =
+            std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+    }
+
+    /// A FIFO, a directory and a symbolic link named as the output are
+    /// refused and left as they were.
+    #[cfg(unix)]
+    #[test]
+    fn outputs_replace_only_regular_files() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("out.exr");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+        let e = write_atomic(&fifo, b"x").unwrap_err().to_string();
+        assert!(e.contains("a pipe") && e.contains("regular file"), "{e}");
+        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        let sub = dir.path().join("sub.exr");
+        std::fs::create_dir(&sub).unwrap();
+        assert!(write_atomic(&sub, b"x").unwrap_err().to_string().contains("a directory"));
+        let target = dir.path().join("target.exr");
+        std::fs::write(&target, b"kept").unwrap();
+        let link = dir.path().join("link.exr");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        assert!(write_atomic(&link, b"x").unwrap_err().to_string().contains("a symbolic link"));
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"kept");
+        // A regular file is replaced.
+        write_atomic(&target, b"new").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
     }
 
     #[test]

@@ -26,12 +26,18 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// longer than `limit` ([`CoreError::TooLarge`]); both the size the file system
 /// reports and the bytes actually read are checked, so a file that grows
 /// while it is read is refused too.
+///
+/// The path's type is looked at before it is opened (opening a FIFO for
+/// reading waits for a writer), and the file is opened without blocking
+/// and looked at again, so a path swapped for a FIFO in between is refused
+/// too instead of hanging the read.
 pub fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>> {
     let read_err = |source| CoreError::Read { path: path.into(), source };
-    let file = std::fs::File::open(path).map_err(read_err)?;
+    check_regular_file(path)?;
+    let file = open_without_blocking(path).map_err(read_err)?;
     let meta = file.metadata().map_err(read_err)?;
     if !meta.is_file() {
-        return Err(CoreError::NotAFile { path: path.into(), kind: file_kind(&meta) });
+        return Err(CoreError::NotAFile { path: path.into(), kind: kind_of(&meta) });
     }
     if meta.len() > limit {
         return Err(CoreError::TooLarge { path: path.into(), size: meta.len(), limit });
@@ -58,10 +64,25 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String> {
 /// Checks that `path` names an existing regular file without reading it.
 pub fn check_regular_file(path: &Path) -> Result<()> {
     let meta = std::fs::metadata(path).map_err(|source| CoreError::Read { path: path.into(), source })?;
-    if meta.is_file() { Ok(()) } else { Err(CoreError::NotAFile { path: path.into(), kind: file_kind(&meta) }) }
+    if meta.is_file() { Ok(()) } else { Err(CoreError::NotAFile { path: path.into(), kind: kind_of(&meta) }) }
 }
 
-fn file_kind(meta: &std::fs::Metadata) -> &'static str {
+/// `path` opened for reading; on Unix with `O_NONBLOCK`, which a regular
+/// file ignores and which keeps a FIFO's open from waiting for a writer.
+fn open_without_blocking(path: &Path) -> std::io::Result<std::fs::File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    options.open(path)
+}
+
+/// What a path that is no regular file is, in words ("a directory", "a
+/// device", "a pipe", "a socket").
+pub fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     let t = meta.file_type();
     if t.is_dir() {
         return "a directory";
@@ -105,5 +126,32 @@ mod tests {
         std::fs::write(&f, [b'a', 0xff, b'b']).unwrap();
         assert!(read_text(&f, 100).unwrap_err().to_string().contains("offset 1"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A FIFO with no writer: opening it for reading the plain way waits
+    /// forever. The read must answer at once, refusing it as a pipe.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_is_refused_without_waiting_for_a_writer() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("scene.toml");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo (coreutils) runs");
+        assert!(made.success(), "mkfifo failed");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send((
+                read_bytes(&path, 100).map(|_| ()).map_err(|e| e.to_string()),
+                read_text(&path, 100).map(|_| ()).map_err(|e| e.to_string()),
+            ));
+        });
+        let (bytes, text) = rx.recv_timeout(std::time::Duration::from_secs(20)).expect("reading a FIFO hung");
+        for e in [bytes, text] {
+            let e = e.unwrap_err();
+            assert!(e.contains("a pipe, not a regular file"), "{e}");
+        }
+        // The no-blocking open itself: a FIFO opened without a writer.
+        let f = open_without_blocking(&fifo).unwrap();
+        assert!(!f.metadata().unwrap().is_file());
     }
 }

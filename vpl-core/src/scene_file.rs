@@ -304,10 +304,21 @@ impl SceneFile {
             });
         }
         if let Some(s) = &f.sequence {
-            if !(s.fps > 0.0 && s.duration > 0.0) {
+            if !(s.fps.is_finite() && s.fps > 0.0 && s.duration.is_finite() && s.duration > 0.0) {
                 return Err(CoreError::SceneFile {
                     path: path.into(),
-                    reason: "sequence.fps and sequence.duration must be positive".into(),
+                    reason: format!("sequence.fps and sequence.duration must be positive and finite, got {} and {}", s.fps, s.duration),
+                });
+            }
+            // Every command that walks a sequence keeps something per frame.
+            let frames = s.duration as f64 * s.fps as f64;
+            if frames >= crate::sequence::MAX_FRAMES as f64 {
+                return Err(CoreError::SceneFile {
+                    path: path.into(),
+                    reason: format!(
+                        "sequence.duration × sequence.fps is {frames:.3e} frames, more than the {} a sequence may have",
+                        crate::sequence::MAX_FRAMES
+                    ),
                 });
             }
         }
@@ -379,5 +390,28 @@ mod tests {
             assert!(e.contains(key), "{e}");
         }
         assert!(SceneFile::parse("[geometry]\n", p).is_err());
+    }
+
+    /// A sequence's rate and length are finite and its frames bounded, so
+    /// no command that walks it allocates per frame without end.
+    #[test]
+    fn sequences_of_unbounded_length_are_refused() {
+        let p = Path::new("x.toml");
+        let file =
+            |fps: &str, duration: &str| format!("[geometry]\nbuiltin = \"cornell\"\n[sequence]\nfps = {fps}\nduration = {duration}\n");
+        assert!(SceneFile::parse(&file("30", "20.0"), p).is_ok());
+        assert!(SceneFile::parse(&file("30", "33000.0"), p).is_ok(), "990 001 frames are allowed");
+        for (fps, duration, says) in [
+            ("inf", "20.0", "finite"),
+            ("nan", "20.0", "finite"),
+            ("30", "1e30", "more than the 1000000"),
+            ("30", "inf", "finite"),
+            ("1e30", "1.0", "more than the 1000000"),
+            ("30", "34000.0", "more than the 1000000"),
+            ("0", "1.0", "positive"),
+        ] {
+            let e = SceneFile::parse(&file(fps, duration), p).unwrap_err().to_string();
+            assert!(e.contains(says), "fps {fps}, duration {duration}: {e}");
+        }
     }
 }

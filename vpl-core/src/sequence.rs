@@ -26,6 +26,10 @@ pub struct LightKey {
     pub direction: Option<Vec3>,
 }
 
+/// The most frames a scene file's sequence may have: 10⁶, over nine hours
+/// at 30 fps (the SMC paper's sequences have 720–750).
+pub const MAX_FRAMES: u32 = 1_000_000;
+
 /// An animation: frames at `fps` for `duration` seconds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sequence {

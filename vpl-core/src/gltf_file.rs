@@ -107,6 +107,7 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
             document.nodes().filter(|n| !children.contains(&n.index())).collect()
         }
     };
+    check_forest(&document, &roots).map_err(err)?;
     for node in roots {
         reader.node(&node, Mat4::IDENTITY, &mut state, 0)?;
     }
@@ -122,6 +123,37 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
         None => state.cameras.first().map(|(_, c)| c.clone()),
     };
     Ok(reader.data)
+}
+
+/// Refuses a node hierarchy that is no set of disjoint trees (glTF 2.0,
+/// §3.5.3: no cycles, and each node has at most one parent): a node that is
+/// a child twice, of one parent or of two; a scene that lists a node twice;
+/// a scene root that is also a child. On a forest the walk from the roots
+/// visits each node at most once; without this check, a node that lists
+/// its one child twice, at each of 60 levels, would be visited 2⁶⁰ times.
+fn check_forest(document: &gltf::Document, roots: &[gltf::Node]) -> std::result::Result<(), String> {
+    let mut parent: Vec<Option<usize>> = vec![None; document.nodes().len()];
+    for node in document.nodes() {
+        for child in node.children() {
+            if let Some(first) = parent[child.index()].replace(node.index()) {
+                return Err(format!(
+                    "node {} is a child twice (of node {first} and of node {}); glTF's nodes form disjoint trees",
+                    child.index(),
+                    node.index()
+                ));
+            }
+        }
+    }
+    let mut listed = vec![false; parent.len()];
+    for root in roots {
+        if std::mem::replace(&mut listed[root.index()], true) {
+            return Err(format!("the scene lists node {} twice", root.index()));
+        }
+        if let Some(p) = parent[root.index()] {
+            return Err(format!("node {} is a root of the scene and a child of node {p}; glTF's nodes form disjoint trees", root.index()));
+        }
+    }
+    Ok(())
 }
 
 struct Reader<'a> {

@@ -222,3 +222,52 @@ fn garbage_and_missing_files_are_errors_not_panics() {
     assert!(load_gltf(&p, None).unwrap_err().to_string().contains("KHR_draco_mesh_compression"));
     assert!(load_gltf(&dir.path().join("none.glb"), None).is_err());
 }
+
+/// A node hierarchy that is no set of disjoint trees is refused before the
+/// walk: a chain of 64 nodes each listing the next twice would otherwise
+/// be walked 2⁶⁴ times. A proper tree with the same lights loads, each
+/// light once.
+#[test]
+fn node_graphs_that_are_no_forest_are_refused_before_the_walk() {
+    let file = |nodes: &str, scene: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_lights_punctual"],
+            "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":1.0}}]}}}},
+            {scene}"nodes":[{nodes}]}}"#
+        )
+    };
+    let light = r#""extensions":{"KHR_lights_punctual":{"light":0}}"#;
+    let chain = |twice: bool| {
+        (0..64)
+            .map(|i| match (i, twice) {
+                (63, _) => format!("{{{light}}}"),
+                (_, true) => format!("{{\"children\":[{0},{0}],{light}}}", i + 1),
+                (_, false) => format!("{{\"children\":[{}],{light}}}", i + 1),
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("g.gltf");
+    std::fs::write(&p, file(&chain(false), r#""scene":0,"scenes":[{"nodes":[0]}],"#)).unwrap();
+    assert_eq!(load_gltf(&p, None).unwrap().lights.len(), 64);
+    for (nodes, scene, says) in [
+        (chain(true), r#""scene":0,"scenes":[{"nodes":[0]}],"#.to_string(), "node 1 is a child twice"),
+        (chain(true), String::new(), "node 1 is a child twice"),
+        (
+            format!(r#"{{"children":[2]}},{{"children":[2]}},{{{light}}}"#),
+            String::new(),
+            "node 2 is a child twice (of node 0 and of node 1)",
+        ),
+        (format!(r#"{{{light}}}"#), r#""scenes":[{"nodes":[0,0]}],"#.to_string(), "lists node 0 twice"),
+        (
+            format!(r#"{{"children":[1]}},{{{light}}}"#),
+            r#""scenes":[{"nodes":[0,1]}],"#.to_string(),
+            "node 1 is a root of the scene and a child of node 0",
+        ),
+    ] {
+        std::fs::write(&p, file(&nodes, &scene)).unwrap();
+        let e = load_gltf(&p, None).unwrap_err().to_string();
+        assert!(e.contains(says), "{e}");
+    }
+}

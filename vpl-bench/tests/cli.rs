@@ -138,6 +138,19 @@ fn unwritable_output_is_an_error_before_rendering() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(!d.join("a.exr").exists(), "nothing written when any output is unwritable");
+    // A FIFO in the output's place is refused in one line and stays a FIFO.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let fifo = d.join("f.exr");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+        let o = vpl().args(["render", "--scene", "cornell", "--spp", "1", "--size", "8x8", "--out"]).arg(&fifo).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("a pipe"), "{err}");
+        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    }
 }
 
 #[test]

@@ -297,7 +297,7 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
         Ok(meta) if meta.is_file() => Ok(()),
         Ok(meta) => {
             let t = meta.file_type();
-            let kind = if t.is_symlink() { "a symbolic link".to_string() } else { crate::input::kind_of(&meta).to_string() };
+            let kind = if t.is_symlink() { "a symbolic link" } else { crate::input::kind_of(&meta) };
             Err(CoreError::Write {
                 path: path.into(),
                 reason: format!("it is {kind}; an output replaces only a regular file or takes a new name"),

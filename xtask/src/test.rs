@@ -4,8 +4,8 @@
 //! unit, integration and example tests run under it: each test is a process
 //! of its own, two binaries' tests share the cores instead of one binary's
 //! slowest test holding up the next binary, and each test's wall time comes
-//! back in `target/nextest/default/junit.xml` (under the workspace's root), from which the slowest are
-//! listed. nextest does not run doctests; `cargo test --doc` runs them
+//! back in `target/nextest/default/junit.xml` (under the workspace's root),
+//! from which the slowest are listed. nextest does not run doctests; `cargo test --doc` runs them
 //! after. Without nextest, `cargo test --workspace` runs everything, as it
 //! always did, and no times are listed (libtest reports a test's time only
 //! on nightly). `--cargo-test` asks for that path with nextest installed.

@@ -495,10 +495,9 @@ fn check_writable(path: &Path) -> Res<()> {
     if md.permissions().readonly() {
         return Err(format!("cannot write {}: directory {} is read-only", path.display(), dir.display()));
     }
-    if path.is_dir() {
-        return Err(format!("cannot write {}: it is a directory", path.display()));
-    }
-    Ok(())
+    // A folder, device, FIFO or link in the output's place is refused here,
+    // before any work, by the rule the final write applies.
+    vpl_core::image::check_replaceable(path).map_err(|e| e.to_string())
 }
 
 /// Loads a scene, checks the frame against its sequence, and applies `--size`.

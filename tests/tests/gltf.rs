@@ -25,9 +25,10 @@ fn gltf_scenes_render_with_their_light_as_the_path_tracer_does() {
     std::fs::write(
         &box_toml,
         format!(
-            "[geometry]\ngltf = \"{}\"\n[camera]\norigin = [1.5, 1.2, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 45.0\n\
+            "[geometry]\ngltf = \"{}\"\nallow_outside = [\"{}\"]\n[camera]\norigin = [1.5, 1.2, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 45.0\n\
              [[lights]]\ntype = \"point\"\nposition = [0.8, 1.5, 0.6]\nintensity = [2.0, 2.0, 2.0]\n",
-            gltf_data("Box/Box.gltf").display()
+            gltf_data("Box/Box.gltf").display(),
+            gltf_data("Box").display()
         ),
     )
     .unwrap();

@@ -22,8 +22,9 @@ fn cbox_toml(dir: &Path) -> String {
         dir,
         "cbox.toml",
         &format!(
-            "[geometry]\nobj = \"{}\"\ntwo_sided = false\n\n[camera]\norigin = [0.0, 0.0, 3.9]\ntarget = [0.0, 0.0, 0.0]\nfov = 39.3077\nresolution = [256, 256]\n",
-            obj.display()
+            "[geometry]\nobj = \"{}\"\nallow_outside = [\"{}\"]\ntwo_sided = false\n\n[camera]\norigin = [0.0, 0.0, 3.9]\ntarget = [0.0, 0.0, 0.0]\nfov = 39.3077\nresolution = [256, 256]\n",
+            obj.display(),
+            data_dir().display()
         ),
     )
 }
@@ -171,8 +172,9 @@ fn material_overrides_and_z_up() {
         &dir,
         "o.toml",
         &format!(
-            "[geometry]\nobj = \"{}\"\nup = \"z\"\nscale = 2.0\n\n[[materials]]\nname = \"red\"\nalbedo = [0.1, 0.2, 0.3]\nkappa = 0.5\n",
-            obj.display()
+            "[geometry]\nobj = \"{}\"\nallow_outside = [\"{}\"]\nup = \"z\"\nscale = 2.0\n\n[[materials]]\nname = \"red\"\nalbedo = [0.1, 0.2, 0.3]\nkappa = 0.5\n",
+            obj.display(),
+            data_dir().display()
         ),
     );
     let s = SceneSetup::load(&t).unwrap();
@@ -182,7 +184,15 @@ fn material_overrides_and_z_up() {
     // Z-up: the light plane y = 0.99 becomes z = −0.99, scaled by 2.
     let (lo, hi) = s.scene.geometry.bounds;
     assert!((hi.y - 2.0).abs() < 1e-5 && (lo.z + 2.0).abs() < 1e-5 && (hi.z - 2.02).abs() < 1e-4, "{lo} {hi}");
-    let bad = write(&dir, "b.toml", &format!("[geometry]\nobj = \"{}\"\n[[materials]]\nname = \"nope\"\n", obj.display()));
+    let bad = write(
+        &dir,
+        "b.toml",
+        &format!(
+            "[geometry]\nobj = \"{}\"\nallow_outside = [\"{}\"]\n[[materials]]\nname = \"nope\"\n",
+            obj.display(),
+            data_dir().display()
+        ),
+    );
     assert!(SceneSetup::load(&bad).unwrap_err().to_string().contains("nope"));
 }
 

@@ -119,9 +119,12 @@ fn devices_and_absurd_values_are_refused_at_load() {
     let d = scratch("load");
     let out = d.join("r.exr");
     let zero = write(&d, "zero.toml", "[geometry]\nobj = \"/dev/zero\"\n");
-    refused(&render(&["--scene", &zero], &out), "/dev/zero is a device", "obj = /dev/zero");
+    // Outside the scene's folder: refused by the sandbox; allowed, still no file.
+    refused(&render(&["--scene", &zero], &out), "'/dev/zero' leaves the scene's folder", "obj = /dev/zero");
+    refused(&render(&["--scene", &zero, "--allow-outside", "/dev"], &out), "/dev/zero is a device", "obj = /dev/zero, allowed");
     let scene = cornell(&d, None, |o| o.replace("mtllib cbox.mtl", "mtllib /dev/zero"));
-    refused(&render(&["--scene", &scene], &out), "/dev/zero is a device", "mtllib /dev/zero");
+    refused(&render(&["--scene", &scene], &out), "'/dev/zero' leaves the scene's folder", "mtllib /dev/zero");
+    refused(&render(&["--scene", &scene, "--allow-outside", "/dev"], &out), "/dev/zero is a device", "mtllib /dev/zero, allowed");
     let huge = write(&d, "e.toml", "[geometry]\nbuiltin = \"cornell\"\n[[materials]]\nname = \"light\"\nemission = [3e38, 3e38, 3e38]\n");
     refused(&render(&["--scene", &huge], &out), "material 'light' emission", "emission 3e38");
     let bright = write(&d, "a.toml", "[geometry]\nbuiltin = \"cornell\"\n[[materials]]\nname = \"white\"\nalbedo = [1.5, 0.5, 0.5]\n");

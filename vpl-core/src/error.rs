@@ -32,6 +32,15 @@ pub enum CoreError {
         /// What it is instead.
         kind: &'static str,
     },
+    /// A scene file names a file outside the scene's folder (see
+    /// [`crate::sandbox`]).
+    #[error("the reference '{reference}' leaves the scene's folder {root}; pass --allow-outside with a folder that holds it to allow it")]
+    OutsideScene {
+        /// The reference as the scene file writes it.
+        reference: String,
+        /// The scene's folder.
+        root: PathBuf,
+    },
     /// An input file is longer than the limit for its kind
     /// (see [`crate::input`]).
     #[error("{path} has {size} bytes, more than the {limit} this kind of input may have")]

@@ -41,15 +41,19 @@
 //! other extensions) is ignored; a file that requires an extension this
 //! reader does not know is refused by name.
 
+use crate::bitmap::{AlphaUse, Depth, Texels};
 use crate::camera::FovAxis;
 use crate::error::{CoreError, Result};
-use crate::input::{MAX_MESH_BYTES, read_bytes};
+use crate::input::{MAX_IMAGE_BYTES, MAX_MESH_BYTES, read_bytes};
 use crate::material::{Layered, Material};
 use crate::mesh::{Mesh, TriangleDesc};
+use crate::sandbox::Sandbox;
 use crate::scene_file::{CameraSpec, LightSpec};
 use glam::{Mat3, Mat4, Vec3};
 pub use gltf;
+use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// A glTF scene as the toolkit reads it.
@@ -76,12 +80,29 @@ pub const SUPPORTED_EXTENSIONS: &[&str] =
 /// How deep nodes may nest.
 const MAX_DEPTH: usize = 256;
 
+/// The most bytes the mesh read from one file may take when no memory limit
+/// is given (16 GiB: about 200 M triangles with normals).
+pub const MAX_MESH_MEMORY: u64 = 16 << 30;
+
+/// Bytes the loaded mesh takes per vertex read: the position read and its
+/// world-space copy.
+const BYTES_PER_VERTEX: u64 = 24;
+/// Bytes per index read: the index and a third of a triangle record.
+const BYTES_PER_INDEX: u64 = 16;
+
 /// Image height of a glTF camera (its width follows `aspectRatio`).
 const CAMERA_HEIGHT: u32 = 480;
 
 /// Loads a `.gltf` or `.glb` file; `camera` picks a camera by name (the
-/// first perspective camera without it).
+/// first perspective camera without it). Its buffers and images must lie
+/// in its folder (see [`load_gltf_in`] to allow more).
 pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
+    load_gltf_in(path, camera, &Sandbox::for_scene(path, &Default::default())?)
+}
+
+/// [`load_gltf`] reading buffers and images only where `sandbox` allows,
+/// and within its memory limit.
+pub fn load_gltf_in(path: &Path, camera: Option<&str>, sandbox: &Sandbox) -> Result<GltfData> {
     let err = |reason: String| CoreError::Gltf { path: path.into(), reason };
     let bytes = read_bytes(path, MAX_MESH_BYTES)?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| err(e.to_string()))?;
@@ -91,9 +112,14 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
             return Err(err(format!("requires the extension {required}, which this reader does not support")));
         }
     }
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-    let buffers = gltf::import_buffers(&document, Some(&base), blob).map_err(|e| err(format!("buffers: {e}")))?;
-    let mut reader = Reader { buffers: &buffers, images: None, base, path: path.into(), data: GltfData::default() };
+    let base = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let budget = sandbox.memory_limit().unwrap_or(MAX_MESH_MEMORY).min(MAX_MESH_MEMORY);
+    let mut reader =
+        Reader { buffers: Vec::new(), textures: HashMap::new(), base, sandbox, path: path.into(), budget, data: GltfData::default() };
+    reader.buffers = reader.load_buffers(&document, blob)?;
     let mut state = Walk { default_material: None, cameras: Vec::new() };
     for m in document.materials() {
         reader.material(&document, &m)?;
@@ -157,11 +183,17 @@ fn check_forest(document: &gltf::Document, roots: &[gltf::Node]) -> std::result:
 }
 
 struct Reader<'a> {
-    buffers: &'a [gltf::buffer::Data],
-    /// Decoded on first use (only files whose materials have textures pay).
-    images: Option<Vec<gltf::image::Data>>,
+    /// The bytes of each buffer, at least its `byteLength` of them.
+    buffers: Vec<Vec<u8>>,
+    /// The mean colour of each (image, alpha cutoff, blend) read so far;
+    /// images are decoded one at a time, when a material first needs them.
+    textures: HashMap<(usize, Option<u32>, bool), Option<Vec3>>,
+    /// The folder of the file: relative URIs start here.
     base: PathBuf,
+    sandbox: &'a Sandbox,
     path: PathBuf,
+    /// Bytes the mesh may still grow by.
+    budget: u64,
     data: GltfData,
 }
 
@@ -232,16 +264,27 @@ impl Reader<'_> {
             self.data.warnings.push(format!("{what}: no POSITION, skipped"));
             return Ok(());
         };
-        self.check_accessor(&pos_acc, &what)?;
+        self.check_accessor(&pos_acc, &what, "POSITION", Kind::Vec3)?;
         let normal_acc = prim.get(&gltf::Semantic::Normals);
         if let Some(a) = &normal_acc {
-            self.check_accessor(a, &what)?;
+            self.check_accessor(a, &what, "NORMAL", Kind::Vec3)?;
         }
         if let Some(a) = prim.indices() {
-            self.check_accessor(&a, &what)?;
+            self.check_accessor(&a, &what, "indices", Kind::Index)?;
         }
-        let buffers = self.buffers;
-        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        // What the primitive adds to the mesh, refused before it is read.
+        let vertices = pos_acc.count() as u64;
+        let indices = prim.indices().map_or(vertices, |a| a.count() as u64);
+        let cost = vertices * BYTES_PER_VERTEX * if normal_acc.is_some() { 2 } else { 1 } + indices * BYTES_PER_INDEX;
+        if cost > self.budget {
+            return Err(self.err(format!(
+                "{what}: its {vertices} vertices and {indices} indices take about {cost} bytes, more than the {} left of the memory limit",
+                self.budget
+            )));
+        }
+        self.budget -= cost;
+        let buffers = &self.buffers;
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
         let positions: Vec<Vec3> =
             reader.read_positions().ok_or_else(|| self.err(format!("{what}: POSITION cannot be read")))?.map(Vec3::from).collect();
         check_bounds(&pos_acc, &positions).map_err(|r| self.err(format!("{what}: {r}")))?;
@@ -297,29 +340,134 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// Refuses an accessor the `gltf` reader would index past its data.
-    fn check_accessor(&self, a: &gltf::Accessor, what: &str) -> Result<()> {
-        if a.count() == 0 {
-            return Err(self.err(format!("{what}: accessor {} is empty", a.index())));
-        }
-        if a.sparse().is_some() {
-            // The reader bounds-checks sparse data itself (and returns nothing on a bad range).
-            return Ok(());
-        }
-        let Some(view) = a.view() else {
-            return Err(self.err(format!("{what}: accessor {} has no buffer view", a.index())));
+    /// Refuses an accessor the `gltf` reader would misread or index past its
+    /// data: one whose type is not what its use requires (glTF 2.0 §3.7.2.1:
+    /// POSITION and NORMAL are float VEC3; §3.7.2.2 indices are unsigned
+    /// integer scalars), whose elements overlap (a stride under their size),
+    /// or whose elements, sparse indices or sparse values reach past their
+    /// buffer view or a view past its buffer.
+    fn check_accessor(&self, a: &gltf::Accessor, what: &str, role: &str, kind: Kind) -> Result<()> {
+        let fail = |reason: String| self.err(format!("{what}: {role} accessor {}: {reason}", a.index()));
+        let (ty, dims) = (a.data_type(), a.dimensions());
+        let fits = match kind {
+            Kind::Vec3 => ty == DataType::F32 && dims == Dimensions::Vec3,
+            Kind::Index => matches!(ty, DataType::U8 | DataType::U16 | DataType::U32) && dims == Dimensions::Scalar,
         };
-        let size = a.size();
-        let stride = view.stride().unwrap_or(size);
-        if stride < size {
-            return Err(self.err(format!("{what}: buffer view {} has a stride of {stride} for elements of {size} bytes", view.index())));
+        if !fits {
+            let want = match kind {
+                Kind::Vec3 => "FLOAT VEC3",
+                Kind::Index => "an UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT SCALAR",
+            };
+            return Err(fail(format!("it holds {ty:?} {dims:?}; {role} must be {want}")));
         }
-        let end = a.offset() + stride * (a.count() - 1) + size;
-        let buffer_len = self.buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
-        if end > view.length() || view.offset() + view.length() > buffer_len {
-            return Err(self.err(format!("{what}: accessor {} reaches past its buffer", a.index())));
+        if a.count() == 0 {
+            return Err(fail("it is empty".into()));
+        }
+        let size = a.size();
+        if let Some(view) = a.view() {
+            self.check_elements(&view, a.offset(), a.count(), size).map_err(fail)?;
+        }
+        if let Some(sparse) = a.sparse() {
+            let n = sparse.count();
+            if n == 0 || n > a.count() {
+                return Err(fail(format!("{n} sparse elements for {} elements (1 to {} allowed)", a.count(), a.count())));
+            }
+            let indices = sparse.indices();
+            let (view, index_size) = (indices.view(), indices.index_type().size());
+            self.check_elements(&view, indices.offset(), n, index_size).map_err(|r| fail(format!("sparse indices: {r}")))?;
+            let values = sparse.values();
+            self.check_elements(&values.view(), values.offset(), n, size).map_err(|r| fail(format!("sparse values: {r}")))?;
+        } else if a.view().is_none() {
+            return Err(fail("it has neither a buffer view nor sparse data".into()));
         }
         Ok(())
+    }
+
+    /// Checks that `count` elements of `size` bytes from `offset` in `view`
+    /// (at its stride) lie inside the view, and the view inside its buffer.
+    fn check_elements(&self, view: &gltf::buffer::View, offset: usize, count: usize, size: usize) -> std::result::Result<(), String> {
+        let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return Err(format!("buffer view {} has a stride of {stride} bytes for elements of {size}", view.index()));
+        }
+        let end = (count as u64 - 1)
+            .checked_mul(stride as u64)
+            .and_then(|x| x.checked_add(offset as u64 + size as u64))
+            .filter(|&end| end <= view.length() as u64);
+        if end.is_none() {
+            return Err(format!("{count} elements of {size} bytes at offset {offset} reach past buffer view {}", view.index()));
+        }
+        self.view_bytes(view).map(|_| ())
+    }
+
+    /// The bytes of a buffer view; an error naming it when it reaches past
+    /// its buffer.
+    fn view_bytes(&self, view: &gltf::buffer::View) -> std::result::Result<&[u8], String> {
+        let buffer = view.buffer().index();
+        let data = self.buffers.get(buffer).map_or(&[][..], |d| &d[..]);
+        let range = view.offset().checked_add(view.length()).map(|end| view.offset()..end);
+        range.and_then(|r| data.get(r)).ok_or_else(|| {
+            format!(
+                "buffer view {} ({} bytes at offset {}) reaches past buffer {buffer} of {} bytes",
+                view.index(),
+                view.length(),
+                view.offset(),
+                data.len()
+            )
+        })
+    }
+
+    /// Every buffer's bytes: the GLB's binary chunk, a base64 `data:` URI,
+    /// or a file inside the sandbox (at most [`MAX_MESH_BYTES`]); each must
+    /// hold at least the `byteLength` it declares.
+    fn load_buffers(&self, document: &gltf::Document, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>> {
+        let mut out = Vec::with_capacity(document.buffers().len());
+        for buffer in document.buffers() {
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob
+                    .take()
+                    .ok_or_else(|| self.err(format!("buffer {} is the binary chunk, which the file does not have", buffer.index())))?,
+                gltf::buffer::Source::Uri(uri) => self.uri_bytes(uri, MAX_MESH_BYTES, &format!("buffer {}", buffer.index()))?,
+            };
+            if data.len() < buffer.length() {
+                return Err(self.err(format!("buffer {} declares {} bytes but holds {}", buffer.index(), buffer.length(), data.len())));
+            }
+            out.push(data);
+        }
+        Ok(out)
+    }
+
+    /// The bytes a URI names: a base64 `data:` URI, or a relative path
+    /// (%-escapes decoded; `file:` URIs taken as paths) read through the
+    /// sandbox with at most `limit` bytes. Other schemes are refused.
+    fn uri_bytes(&self, uri: &str, limit: u64, what: &str) -> Result<Vec<u8>> {
+        let fail = |reason: String| self.err(format!("{what}: {reason}"));
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let Some((_, data)) = rest.split_once(";base64,") else {
+                return Err(fail("its data URI is not base64".into()));
+            };
+            if data.len() as u64 / 4 * 3 > limit {
+                return Err(fail(format!("its data URI holds more than the {limit} bytes this input may have")));
+            }
+            return base64::decode(data).map_err(|e| fail(format!("its data URI is not valid base64 ({e})")));
+        }
+        let path = match uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+            Some(p) => p,
+            None if has_scheme(uri) => return Err(fail("only relative paths, file: and data: URIs are read".into())),
+            None => uri,
+        };
+        let decoded = percent_encoding::percent_decode_str(path)
+            .decode_utf8()
+            .map_err(|_| fail("its URI's %-escapes do not decode to UTF-8".into()))?;
+        // A reference that leaves the sandbox keeps its own error; others
+        // say which buffer or image they are.
+        let wrap = |e: CoreError| match e {
+            e @ CoreError::OutsideScene { .. } => e,
+            CoreError::Invalid(r) => fail(r),
+            e => fail(e.to_string()),
+        };
+        let file = self.sandbox.resolve(&self.base, &decoded).map_err(wrap)?;
+        read_bytes(&file, limit).map_err(wrap)
     }
 
     /// Appends the toolkit's material for `m` (materials keep glTF's order).
@@ -366,24 +514,42 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// The average linear colour of a texture's image (sRGB decoded).
+    /// The average linear colour of a texture's image (sRGB decoded),
+    /// decoded within the memory limit when first used.
     fn texture_average(
         &mut self,
-        doc: &gltf::Document,
+        _doc: &gltf::Document,
         tex: &gltf::Texture,
         cutoff: Option<f32>,
         blend: bool,
         material: &str,
     ) -> Result<Vec3> {
-        if self.images.is_none() {
-            let images = gltf::import_images(doc, Some(&self.base), self.buffers).map_err(|e| self.err(format!("images: {e}")))?;
-            self.images = Some(images);
-        }
-        let images = self.images.as_ref().expect("decoded above");
-        let Some(img) = images.get(tex.source().index()) else {
-            return Err(self.err(format!("material {material}: texture image {} is missing", tex.source().index())));
+        let image = tex.source();
+        let key = (image.index(), cutoff.map(f32::to_bits), blend);
+        let mean = match self.textures.get(&key) {
+            Some(m) => *m,
+            None => {
+                let what = format!("material {material}: image {}", image.index());
+                let (bytes, mime) = match image.source() {
+                    gltf::image::Source::View { view, mime_type } => {
+                        (self.view_bytes(&view).map_err(|r| self.err(format!("{what}: {r}")))?.to_vec(), Some(mime_type))
+                    }
+                    gltf::image::Source::Uri { uri, mime_type } => (self.uri_bytes(uri, MAX_IMAGE_BYTES, &what)?, mime_type),
+                };
+                let format = match mime {
+                    Some("image/png") => Some(::image::ImageFormat::Png),
+                    Some("image/jpeg") => Some(::image::ImageFormat::Jpeg),
+                    _ => None,
+                };
+                let img =
+                    crate::bitmap::decode(&bytes, format, self.sandbox.memory_limit()).map_err(|r| self.err(format!("{what}: {r}")))?;
+                drop(bytes);
+                let mean = crate::bitmap::mean_colour(crate::bitmap::texels(&img), true, AlphaUse { cutoff, blend });
+                self.textures.insert(key, mean);
+                mean
+            }
         };
-        match average_colour(img, cutoff, blend) {
+        match mean {
             Some(c) => Ok(c),
             None => {
                 self.data
@@ -445,9 +611,11 @@ fn check_bounds(a: &gltf::Accessor, positions: &[Vec3]) -> std::result::Result<(
     };
     let (Some(lo), Some(hi)) = (bound(a.min()), bound(a.max())) else { return Ok(()) };
     let tol = 1e-4 * (hi - lo).abs().max_element().max(1.0);
-    if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all())) {
+    // The message names the position, never the bytes read (a buffer may
+    // be any file the sandbox allows).
+    if let Some(i) = positions.iter().position(|p| !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all())) {
         return Err(format!(
-            "POSITION {i} of accessor {} is {p}, outside the accessor's min {lo} and max {hi}: the buffer does not match its accessors",
+            "POSITION {i} of accessor {} lies outside the accessor's min and max: the buffer does not match its accessors",
             a.index()
         ));
     }
@@ -466,60 +634,39 @@ pub fn kappa_from_roughness(r: f32) -> f32 {
 /// The mean linear RGB of an image's texels (8- and 16-bit channels are
 /// sRGB, float channels linear); with `cutoff`, texels whose alpha is
 /// under it are left out; with `blend`, each texel counts by its alpha.
-/// `None` when no texel counts.
+/// `None` when no texel counts. See [`crate::bitmap::mean_colour`].
 pub fn average_colour(img: &gltf::image::Data, cutoff: Option<f32>, blend: bool) -> Option<Vec3> {
     use gltf::image::Format;
-    let (channels, bytes) = match img.format {
-        Format::R8 => (1, 1),
-        Format::R8G8 => (2, 1),
-        Format::R8G8B8 => (3, 1),
-        Format::R8G8B8A8 => (4, 1),
-        Format::R16 => (1, 2),
-        Format::R16G16 => (2, 2),
-        Format::R16G16B16 => (3, 2),
-        Format::R16G16B16A16 => (4, 2),
-        Format::R32G32B32FLOAT => (3, 4),
-        Format::R32G32B32A32FLOAT => (4, 4),
+    let (channels, depth) = match img.format {
+        Format::R8 => (1, Depth::U8),
+        Format::R8G8 => (2, Depth::U8),
+        Format::R8G8B8 => (3, Depth::U8),
+        Format::R8G8B8A8 => (4, Depth::U8),
+        Format::R16 => (1, Depth::U16),
+        Format::R16G16 => (2, Depth::U16),
+        Format::R16G16B16 => (3, Depth::U16),
+        Format::R16G16B16A16 => (4, Depth::U16),
+        Format::R32G32B32FLOAT => (3, Depth::F32),
+        Format::R32G32B32A32FLOAT => (4, Depth::F32),
     };
-    let texel = channels * bytes;
-    // A lookup table for 8-bit sRGB.
-    let lut: Vec<f32> = (0..256).map(|v| crate::image::srgb_to_linear(v as f32 / 255.0)).collect();
-    let read = |t: &[u8], c: usize| -> f32 {
-        match bytes {
-            1 => t[c] as f32 / 255.0,
-            2 => u16::from_le_bytes([t[2 * c], t[2 * c + 1]]) as f32 / 65535.0,
-            _ => f32::from_le_bytes([t[4 * c], t[4 * c + 1], t[4 * c + 2], t[4 * c + 3]]),
-        }
-    };
-    let linear = |t: &[u8], c: usize| -> f32 {
-        match bytes {
-            1 => lut[t[c] as usize],
-            2 => crate::image::srgb_to_linear(read(t, c)),
-            _ => read(t, c),
-        }
-    };
-    let (mut sum, mut weight) = (glam::DVec3::ZERO, 0.0f64);
-    for t in img.pixels.chunks_exact(texel) {
-        let rgb = match channels {
-            1 | 2 => Vec3::splat(linear(t, 0)),
-            _ => Vec3::new(linear(t, 0), linear(t, 1), linear(t, 2)),
-        };
-        let alpha = match channels {
-            2 => read(t, 1),
-            4 => read(t, 3),
-            _ => 1.0,
-        };
-        let w = match cutoff {
-            Some(c) if alpha < c => continue,
-            _ if blend => alpha.clamp(0.0, 1.0),
-            _ => 1.0,
-        };
-        if rgb.is_finite() {
-            sum += rgb.as_dvec3() * w as f64;
-            weight += w as f64;
-        }
-    }
-    (weight > 0.0).then(|| (sum / weight).as_vec3())
+    crate::bitmap::mean_colour(Texels { bytes: &img.pixels, channels, depth }, true, AlphaUse { cutoff, blend })
+}
+
+/// What an accessor must hold for its use.
+#[derive(Clone, Copy)]
+enum Kind {
+    /// POSITION and NORMAL: FLOAT VEC3.
+    Vec3,
+    /// Indices: unsigned integer scalars.
+    Index,
+}
+
+/// Whether a URI starts with a scheme (`name:` with a letter first, then
+/// letters, digits, `+`, `-` or `.`; RFC 3986 §3.1).
+fn has_scheme(uri: &str) -> bool {
+    let Some((scheme, _)) = uri.split_once(':') else { return false };
+    let mut chars = scheme.chars();
+    chars.next().is_some_and(|c| c.is_ascii_alphabetic()) && chars.all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
 }
 
 /// A perspective camera on a node: at the node's origin, looking along its

@@ -41,6 +41,8 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "formats")]
+pub mod bitmap;
 pub mod bsdf;
 pub mod budget;
 pub mod builtin;
@@ -77,6 +79,7 @@ pub mod ray;
 pub mod resample;
 pub mod rng;
 pub mod sampling;
+pub mod sandbox;
 pub mod scene;
 pub mod scene_file;
 pub mod sequence;
@@ -110,6 +113,7 @@ pub use mode::Mode;
 pub use params::{ParamError, ParamKey, Params};
 pub use ray::{LocalFrame, Ray};
 pub use rng::{Purpose, RngStream, stream};
+pub use sandbox::LoadOptions;
 pub use scene::{Geometry, Scene, TriangleData};
 pub use scene_file::SceneFile;
 pub use sequence::Sequence;

@@ -18,6 +18,7 @@ use crate::input::{self, MAX_MESH_BYTES, MAX_TEXT_BYTES};
 use crate::material::{Layered, Material};
 use crate::mesh::{Mesh, TriangleDesc};
 use crate::mtl::{MtlMaterial, parse_mtl};
+use crate::sandbox::Sandbox;
 use glam::Vec3;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -40,16 +41,24 @@ pub struct ObjData {
 /// [`MAX_MESH_BYTES`]), each MTL likewise (at most [`MAX_TEXT_BYTES`]) and
 /// parsed by [`crate::mtl`]. A library that does not exist gives a warning and
 /// the default material; one that is malformed, no regular file or too long is
-/// an error.
+/// an error. Libraries must lie in the OBJ's folder (see [`load_obj_in`]).
 pub fn load_obj(path: &Path) -> Result<ObjData> {
+    load_obj_in(path, &Sandbox::for_scene(path, &Default::default())?)
+}
+
+/// [`load_obj`] reading material libraries only where `sandbox` allows.
+pub fn load_obj_in(path: &Path, sandbox: &Sandbox) -> Result<ObjData> {
     let bytes = input::read_bytes(path, MAX_MESH_BYTES)?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
     parse_obj(&bytes, path, |name| {
-        let p = dir.join(name);
-        match input::read_text(&p, MAX_TEXT_BYTES) {
+        let found = sandbox.resolve(&dir, name).and_then(|p| input::read_text(&p, MAX_TEXT_BYTES).map(|t| (p, t)));
+        match found {
             Err(CoreError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(e),
-            Ok(text) => Ok(Some((p, text))),
+            Ok(found) => Ok(Some(found)),
         }
     })
 }
@@ -328,7 +337,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("vpl-core-obj-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("s.obj"), format!("mtllib /dev/zero\n{QUAD}")).unwrap();
+        // Outside the OBJ's folder: refused by the sandbox, naming it.
         let e = load_obj(&dir.join("s.obj")).unwrap_err();
+        assert!(matches!(e, CoreError::OutsideScene { .. }) && e.to_string().contains("/dev/zero"), "{e}");
+        // Allowed there, it is still no regular file.
+        let sandbox = Sandbox::for_scene(&dir.join("s.obj"), &crate::LoadOptions::allowing("/dev")).unwrap();
+        let e = load_obj_in(&dir.join("s.obj"), &sandbox).unwrap_err();
         assert!(e.to_string().contains("/dev/zero is a device"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -17,9 +17,70 @@ pub fn load_ply(path: &Path) -> Result<Mesh> {
     parse_ply(&bytes, path)
 }
 
+/// Checks the header's element counts against the bytes after it, before
+/// the parser allocates for them: each element takes at least its
+/// properties' sizes in a binary file (a list at least its count) and two
+/// bytes a property in an ASCII one (a digit and a separator). A 200-byte
+/// file that declares 4·10⁹ vertices is refused here; without the check
+/// the parser reserves room for all of them.
+fn check_counts(bytes: &[u8]) -> std::result::Result<(), String> {
+    let end = bytes.windows(10).position(|w| w == b"end_header").ok_or("no end_header line")?;
+    let after = &bytes[end + 10..];
+    let after = after.strip_prefix(b"\r").unwrap_or(after);
+    let after = after.strip_prefix(b"\n").unwrap_or(after);
+    let header = String::from_utf8_lossy(&bytes[..end]);
+    let mut ascii = true;
+    // (name, count, least bytes each)
+    let mut elements: Vec<(String, u64, u64)> = Vec::new();
+    for line in header.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            ["format", f, ..] => ascii = *f == "ascii",
+            ["element", name, count, ..] => {
+                let n = count.parse::<u64>().map_err(|_| format!("element {name}: its count is no whole number"))?;
+                elements.push((name.to_string(), n, 0));
+            }
+            ["property", "list", count_type, ..] | ["property", count_type, ..] => {
+                let size = scalar_size(count_type).ok_or_else(|| format!("property type {count_type} is unknown"))?;
+                if let Some(e) = elements.last_mut() {
+                    e.2 += if ascii { 2 } else { size };
+                }
+            }
+            _ => {}
+        }
+    }
+    // An ASCII file's last value may lack its separator.
+    let body = after.len() as u64 + u64::from(ascii);
+    let mut total = 0u64;
+    for (name, n, least) in elements {
+        if n > 0 && least == 0 {
+            return Err(format!("element {name} declares {n} elements but no properties"));
+        }
+        total = total.saturating_add(n.saturating_mul(least));
+        if total > body {
+            return Err(format!(
+                "element {name} declares {n} elements, more than the {body} bytes after the header can hold ({least} bytes each at least)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Bytes of a PLY scalar type.
+fn scalar_size(t: &str) -> Option<u64> {
+    Some(match t {
+        "char" | "uchar" | "int8" | "uint8" => 1,
+        "short" | "ushort" | "int16" | "uint16" => 2,
+        "int" | "uint" | "float" | "int32" | "uint32" | "float32" => 4,
+        "double" | "float64" => 8,
+        _ => return None,
+    })
+}
+
 /// Parses PLY bytes (`path` names them in errors).
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh> {
     let err = |reason: String| CoreError::Ply { path: path.into(), reason };
+    check_counts(bytes).map_err(err)?;
     let ply = Parser::<DefaultElement>::new().read_ply(&mut std::io::Cursor::new(bytes)).map_err(|e| err(one_line(&e.to_string())))?;
     let vertices = ply.payload.get("vertex").ok_or_else(|| err("no vertex element".into()))?;
     let scalar = |e: &DefaultElement, k: &str| -> Option<f32> {
@@ -119,6 +180,24 @@ property float nx\nproperty float ny\nproperty float nz\nelement face 1\npropert
         assert_eq!(m.triangles.len(), 1);
         assert_eq!(m.normals[2], Vec3::Z);
         assert_eq!(m.triangles[0].n, Some([0, 1, 2]));
+    }
+
+    /// Counts the bytes after the header cannot hold are refused before
+    /// the parser reserves room for them (4·10⁹ vertices in 200 bytes
+    /// asked the allocator for hundreds of GB).
+    #[test]
+    fn counts_beyond_the_bytes_present_are_refused_before_parsing() {
+        let huge = QUAD.replace("element vertex 4", "element vertex 4000000000");
+        let e = parse_ply(huge.as_bytes(), Path::new("q.ply")).unwrap_err().to_string();
+        assert!(e.contains("element vertex declares 4000000000 elements"), "{e}");
+        let binary =
+            "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+        let mut b = binary.as_bytes().to_vec();
+        b.extend_from_slice(&[0u8; 35]);
+        let e = parse_ply(&b, Path::new("b.ply")).unwrap_err().to_string();
+        assert!(e.contains("more than the 35 bytes"), "{e}");
+        let e = parse_ply(b"ply\nformat ascii 1.0\nelement vertex 4000000000\nend_header\n", Path::new("e.ply")).unwrap_err().to_string();
+        assert!(e.contains("no properties"), "{e}");
     }
 
     #[test]

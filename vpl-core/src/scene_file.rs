@@ -61,6 +61,11 @@ pub struct GeometrySpec {
     /// Diffuse surfaces reflect on both sides (default); `false`: back faces are black.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub two_sided: Option<bool>,
+    /// Folders, relative to the TOML file, that the files it names (and the
+    /// files those name) may lie under besides the TOML's own folder (see
+    /// [`crate::sandbox`]); as `--allow-outside` does for the command line.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub allow_outside: Vec<String>,
 }
 
 /// `[camera]`.

@@ -6,8 +6,7 @@ use crate::camera::{Camera, FovAxis};
 use crate::error::{CoreError, Result};
 use crate::light::Light;
 use crate::material::{Layered, Material};
-#[cfg(feature = "formats")]
-use crate::obj::load_obj;
+use crate::sandbox::{LoadOptions, Sandbox};
 use crate::scene::Scene;
 use crate::scene_file::{CameraSpec, GeometrySpec, LightSpec, SceneFile, SequenceSpec};
 use crate::sequence::{CameraKey, LightKey, Sequence};
@@ -32,15 +31,33 @@ pub struct SceneSetup {
 impl SceneSetup {
     /// Loads `spec`: a built-in name, a `.toml` scene file, an `.obj` file or
     /// a glTF 2.0 file (`.gltf`, `.glb`) or a Mitsuba 3 XML scene (`.xml`).
+    ///
+    /// The files a scene file names must lie in its folder; see
+    /// [`SceneSetup::load_with`] to allow more.
     pub fn load(spec: &str) -> Result<SceneSetup> {
+        Self::load_with(spec, &LoadOptions::default())
+    }
+
+    /// [`SceneSetup::load`] with `options`: the folders besides the
+    /// scene's own that its files may name, and the memory limit of
+    /// loading (see [`crate::sandbox`]).
+    pub fn load_with(spec: &str, options: &LoadOptions) -> Result<SceneSetup> {
         let path = Path::new(spec);
         let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
         match ext.as_deref() {
             #[cfg(feature = "formats")]
             Some("toml") => {
                 let file = SceneFile::read(path)?;
+                // The description the user named may widen its own sandbox.
+                let folder = path.parent().unwrap_or(Path::new("."));
+                let mut options = options.clone();
+                options.allow_outside.extend(file.geometry.allow_outside.iter().map(|r| folder.join(r)));
+                let sandbox = Sandbox::for_scene(path, &options).map_err(|e| match e {
+                    CoreError::Invalid(r) => CoreError::Invalid(r.replace("--allow-outside", "geometry.allow_outside")),
+                    e => e,
+                })?;
                 // Values the description holds are named with the file they come from.
-                Self::from_file(file, path.parent().unwrap_or(Path::new("."))).map_err(|e| match e {
+                Self::build(file, path.parent().unwrap_or(Path::new(".")), Some(sandbox)).map_err(|e| match e {
                     CoreError::BadValue { what, reason } => CoreError::BadValue { what: format!("{spec}: {what}"), reason },
                     CoreError::Invalid(s) => CoreError::Invalid(format!("{spec}: {s}")),
                     e => e,
@@ -59,9 +76,10 @@ impl SceneSetup {
                     up: "y".into(),
                     scale: 1.0,
                     two_sided: None,
+                    allow_outside: Vec::new(),
                 };
                 let file = SceneFile { geometry, camera: None, lights: None, materials: Vec::new(), sequence: None };
-                Self::from_file(file, Path::new(""))
+                Self::build(file, Path::new(""), Some(Sandbox::for_scene(path, options)?))
             }
             _ if builtin::NAMES.contains(&spec) => Self::builtin(spec),
             _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf, .glb or .xml"))),
@@ -83,7 +101,22 @@ impl SceneSetup {
     /// `[[lights]]`, the sequence's keys, and a glTF file's own camera and
     /// lights) is in the model's frame: `geometry.up = "z"` turns all of it
     /// to the toolkit's +Y up, and `geometry.scale` scales all positions.
+    ///
+    /// The files it names must lie under `base`.
     pub fn from_file(file: SceneFile, base: &Path) -> Result<SceneSetup> {
+        Self::build(file, base, None)
+    }
+
+    /// [`SceneSetup::from_file`] whose files may also lie where `options`
+    /// allow.
+    pub fn from_file_with(file: SceneFile, base: &Path, options: &LoadOptions) -> Result<SceneSetup> {
+        let sandbox = if file.geometry.builtin.is_some() { None } else { Some(Sandbox::for_folder(base, options)?) };
+        Self::build(file, base, sandbox)
+    }
+
+    /// Builds from `file`, reading its files through `sandbox` (the
+    /// sandbox of `base` when `None` and files are read).
+    fn build(file: SceneFile, base: &Path, sandbox: Option<Sandbox>) -> Result<SceneSetup> {
         let mut warnings = Vec::new();
         let frame = ModelFrame::of(&file.geometry);
         let Loaded { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, defaults, two_sided: two_sided_default } =
@@ -99,12 +132,18 @@ impl SceneSetup {
                     defaults: Some(d),
                     two_sided: b.two_sided,
                 }
-            } else if file.geometry.gltf.is_some() {
-                gltf_geometry(&file.geometry, base, &mut warnings)?
-            } else if file.geometry.mitsuba.is_some() {
-                mitsuba_geometry(&file.geometry, base, &mut warnings)?
             } else {
-                obj_geometry(&file.geometry, base, &mut warnings)?
+                let sandbox = match sandbox {
+                    Some(s) => s,
+                    None => Sandbox::for_folder(base, &LoadOptions::default())?,
+                };
+                if file.geometry.gltf.is_some() {
+                    gltf_geometry(&file.geometry, base, &sandbox, &mut warnings)?
+                } else if file.geometry.mitsuba.is_some() {
+                    mitsuba_geometry(&file.geometry, base, &sandbox, &mut warnings)?
+                } else {
+                    obj_geometry(&file.geometry, base, &sandbox, &mut warnings)?
+                }
             };
         for v in mesh.positions.iter_mut() {
             *v = frame.point(*v);
@@ -494,9 +533,9 @@ fn model_name(p: &Path) -> String {
 /// The OBJ geometry of a description, in the model's frame; loading notes
 /// go to `warnings`.
 #[cfg(feature = "formats")]
-fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = base.join(geometry.obj.as_deref().unwrap_or_default());
-    let data = load_obj(&p)?;
+fn obj_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
+    let p = sandbox.resolve(base, geometry.obj.as_deref().unwrap_or_default())?;
+    let data = crate::obj::load_obj_in(&p, sandbox)?;
     warnings.extend(data.warnings);
     Ok(Loaded {
         name: model_name(&p),
@@ -513,9 +552,9 @@ fn obj_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>
 /// up, unless the description says otherwise), with the file's lights and
 /// camera.
 #[cfg(feature = "formats")]
-fn gltf_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = base.join(geometry.gltf.as_deref().unwrap_or_default());
-    let data = crate::gltf_file::load_gltf(&p, geometry.gltf_camera.as_deref())?;
+fn gltf_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
+    let p = sandbox.resolve(base, geometry.gltf.as_deref().unwrap_or_default())?;
+    let data = crate::gltf_file::load_gltf_in(&p, geometry.gltf_camera.as_deref(), sandbox)?;
     warnings.extend(data.warnings);
     Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, true))
 }
@@ -524,31 +563,31 @@ fn gltf_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String
 /// file's own unless the description says otherwise), with its emitters,
 /// sensor and sidedness.
 #[cfg(feature = "formats")]
-fn mitsuba_geometry(geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = base.join(geometry.mitsuba.as_deref().unwrap_or_default());
+fn mitsuba_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
+    let p = sandbox.resolve(base, geometry.mitsuba.as_deref().unwrap_or_default())?;
     let params: Vec<(String, String)> = geometry.mitsuba_params.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-    let data = crate::mitsuba::load_mitsuba(&p, &params)?;
+    let data = crate::mitsuba::load_mitsuba_in(&p, &params, sandbox)?;
     warnings.extend(data.warnings);
     Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, data.two_sided))
 }
 
 /// Without the `formats` feature there is no Mitsuba reader.
 #[cfg(not(feature = "formats"))]
-fn mitsuba_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
+fn mitsuba_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
     let m = geometry.mitsuba.as_deref().unwrap_or_default();
     Err(CoreError::Invalid(format!("{m}: reading Mitsuba XML files needs vpl-core's `formats` feature")))
 }
 
 /// Without the `formats` feature there is no OBJ reader.
 #[cfg(not(feature = "formats"))]
-fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
+fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
     let obj = geometry.obj.as_deref().unwrap_or_default();
     Err(CoreError::Invalid(format!("{obj}: reading OBJ files needs vpl-core's `formats` feature")))
 }
 
 /// Without the `formats` feature there is no glTF reader.
 #[cfg(not(feature = "formats"))]
-fn gltf_geometry(geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Loaded> {
+fn gltf_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
     let g = geometry.gltf.as_deref().unwrap_or_default();
     Err(CoreError::Invalid(format!("{g}: reading glTF files needs vpl-core's `formats` feature")))
 }
@@ -567,6 +606,7 @@ impl builtin::Builtin {
                 up: "y".into(),
                 scale: 1.0,
                 two_sided: Some(self.two_sided),
+                allow_outside: Vec::new(),
             },
             camera: Some(self.camera.clone()),
             lights: Some(self.lights.clone()),

@@ -277,7 +277,11 @@ fn a_scene_file_references_a_mitsuba_scene_with_parameters() {
     let toml = dir.path().join("s.toml");
     let xml = data("cbox-mitsuba-data/cbox-rgb.xml");
     std::fs::write(&toml, format!("[geometry]\nmitsuba = \"{}\"\n[geometry.mitsuba_params]\nres = \"32\"\n", xml.display())).unwrap();
-    let s = SceneSetup::load(toml.to_str().unwrap()).unwrap();
+    // The XML lies outside the scene file's folder: refused unless allowed.
+    let e = SceneSetup::load(toml.to_str().unwrap()).unwrap_err();
+    assert!(matches!(e, vpl_core::CoreError::OutsideScene { .. }), "{e}");
+    let allow = vpl_core::LoadOptions::allowing(xml.parent().unwrap());
+    let s = SceneSetup::load_with(toml.to_str().unwrap(), &allow).unwrap();
     assert_eq!(s.camera.resolution, (32, 32));
     assert_eq!(s.scene.geometry.triangles.len(), 38);
     assert!(!s.scene.two_sided);

@@ -66,10 +66,14 @@ fn vec3(v: Vec3) -> [f32; 3] {
 impl PyScene {
     /// Loads a built-in scene by name or a scene file (`.toml`, `.obj`,
     /// `.gltf`, `.glb`, `.xml`); raises `VplError` with the loader's message.
+    /// The files a scene file names must lie in its folder, or under one of
+    /// the folders in `allow_outside`.
     #[staticmethod]
-    fn load(py: Python<'_>, spec: &str) -> PyResult<PyScene> {
+    #[pyo3(signature = (spec, allow_outside = Vec::new()))]
+    fn load(py: Python<'_>, spec: &str, allow_outside: Vec<std::path::PathBuf>) -> PyResult<PyScene> {
         let spec = spec.to_string();
-        let setup = py.detach(move || SceneSetup::load(&spec)).map_err(vpl_err)?;
+        let options = vpl_render::vpl_core::LoadOptions { allow_outside, memory_limit: None };
+        let setup = py.detach(move || SceneSetup::load_with(&spec, &options)).map_err(vpl_err)?;
         PyScene::at_frame(Arc::new(setup), 0)
     }
 

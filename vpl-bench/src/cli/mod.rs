@@ -152,6 +152,29 @@ struct SceneArgs {
     /// of this machine's physical memory).
     #[arg(long)]
     memory_limit: Option<MemoryArg>,
+    /// Let the scene's files name files under this folder too (repeatable). Without it a scene file
+    /// reads only files in its own folder and below.
+    #[arg(long, value_name = "PATH")]
+    allow_outside: Vec<PathBuf>,
+}
+
+/// A scene as the command line names it, with where its files may read and
+/// the memory limit its loading keeps to.
+pub(crate) struct SceneSource {
+    spec: String,
+    options: vpl_core::LoadOptions,
+}
+
+impl SceneSource {
+    fn new(spec: String, allow_outside: Vec<PathBuf>, memory: Option<MemoryArg>) -> SceneSource {
+        let options = vpl_core::LoadOptions { allow_outside, memory_limit: Some(memory_limit(memory).0) };
+        SceneSource { spec, options }
+    }
+
+    /// The scene, loaded within its sandbox and memory limit.
+    fn load(&self) -> Res<SceneSetup> {
+        SceneSetup::load_with(&self.spec, &self.options).map_err(|e| e.to_string())
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -501,8 +524,8 @@ fn check_writable(path: &Path) -> Res<()> {
 }
 
 /// Loads a scene, checks the frame against its sequence, and applies `--size`.
-fn load_frame(scene: &str, frame: u32, size: Option<Size>) -> Res<(vpl_core::Scene, vpl_core::Camera)> {
-    let setup = SceneSetup::load(scene).map_err(|e| e.to_string())?;
+fn load_frame(scene: &SceneSource, frame: u32, size: Option<Size>) -> Res<(vpl_core::Scene, vpl_core::Camera)> {
+    let setup = scene.load()?;
     for w in &setup.warnings {
         eprintln!("vpl: warning: {w}");
     }

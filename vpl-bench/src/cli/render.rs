@@ -48,7 +48,7 @@ pub(super) struct Args {
 /// Runs `vpl render`.
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args {
-        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit },
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit, allow_outside },
         method,
         mode,
         spp,
@@ -61,6 +61,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         quiet,
         tev,
     } = args;
+    let scene = SceneSource::new(scene, allow_outside, memory_limit);
     if method == Method::Vpl && materials == Some(MaterialsArg::AsIs) {
         return Err("--materials as-is: the VPL pipeline draws each material's albedo only (use --method path or progressive)".into());
     }
@@ -187,7 +188,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
 #[allow(clippy::too_many_arguments)]
 fn render_vpl(
     registry: &Registry,
-    scene: &str,
+    scene: &SceneSource,
     frame: u32,
     size: Option<Size>,
     seed: u64,
@@ -266,7 +267,7 @@ fn render_vpl(
 /// `vpl render --method progressive`.
 #[allow(clippy::too_many_arguments)]
 fn render_progressive(
-    scene: &str,
+    scene: &SceneSource,
     policy: vpl_core::MaterialPolicy,
     frame: u32,
     size: Option<Size>,

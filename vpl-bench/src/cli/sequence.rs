@@ -34,7 +34,7 @@ pub(super) struct Args {
 /// Runs `vpl sequence`.
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args {
-        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit },
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit, allow_outside },
         frames,
         mode,
         v,
@@ -57,7 +57,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         check_writable(&out.join("frames.csv"))?;
     }
     let pool = pool(threads)?;
-    let setup = SceneSetup::load(&scene).map_err(|e| e.to_string())?;
+    let setup = SceneSource::new(scene, allow_outside, memory_limit).load()?;
     for w in &setup.warnings {
         eprintln!("vpl: warning: {w}");
     }

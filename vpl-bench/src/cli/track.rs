@@ -23,7 +23,13 @@ pub(super) struct Args {
 
 /// Runs `vpl track`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
-    let Args { s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit }, mode, pixels, spp, out } = args;
+    let Args {
+        s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit, allow_outside },
+        mode,
+        pixels,
+        spp,
+        out,
+    } = args;
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
@@ -32,7 +38,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         check_writable(p)?;
     }
     let pool = pool(threads)?;
-    let (sc, camera) = load_frame(&scene, frame, size)?;
+    let (sc, camera) = load_frame(&SceneSource::new(scene, allow_outside, memory_limit), frame, size)?;
     check_memory(&vpl_render::MemoryEstimate::scene(&sc), memory_limit)?;
     let pt = tracer(max_depth, mode, clamp, vpls, &sc, &camera);
     let (w, h) = camera.resolution;

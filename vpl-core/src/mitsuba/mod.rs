@@ -52,6 +52,7 @@ use crate::camera::FovAxis;
 use crate::error::Result;
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::sandbox::Sandbox;
 use crate::scene_file::{CameraSpec, LightSpec};
 use crate::spectral::SpectrumKind;
 use glam::{Mat4, Vec3};
@@ -78,8 +79,16 @@ pub struct MitsubaData {
 
 /// Loads a Mitsuba 3 XML scene; `params` are `$name` values that take
 /// precedence over the file's `<default>`s (as `mitsuba -D name=value`).
+/// The files it includes and names must lie in its folder (see
+/// [`load_mitsuba_in`]).
 pub fn load_mitsuba(path: &Path, params: &[(String, String)]) -> Result<MitsubaData> {
-    let doc = xml::read_document(path, params)?;
+    load_mitsuba_in(path, params, &Sandbox::for_scene(path, &Default::default())?)
+}
+
+/// [`load_mitsuba`] reading includes, meshes and bitmaps only where
+/// `sandbox` allows, and decoding bitmaps within its memory limit.
+pub fn load_mitsuba_in(path: &Path, params: &[(String, String)], sandbox: &Sandbox) -> Result<MitsubaData> {
+    let doc = xml::read_document(path, params, sandbox)?;
     let mut ids: HashMap<&str, &Object> = HashMap::new();
     for o in &doc.objects {
         if let Some(id) = &o.id {
@@ -279,8 +288,9 @@ impl<'a> Ctx<'a> {
                     return Err(self.doc.err(t.at, format!("{} needs a filename", t.what())));
                 };
                 let raw = self.boolean(t, "raw", false)?;
-                let path = self.doc.resolve(&name, t.at);
-                bitmap_average(&path, raw).map_err(|r| self.doc.err(t.at, format!("{} '{name}': {r}", t.what())))?
+                let path = self.doc.resolve(&name, t.at)?;
+                bitmap_average(&path, raw, self.doc.sandbox.memory_limit())
+                    .map_err(|r| self.doc.err(t.at, format!("{} '{name}': {r}", t.what())))?
             }
             other => return Err(self.doc.err(t.at, format!("<texture type=\"{other}\"> is not supported (bitmap and checkerboard are)"))),
         };
@@ -482,20 +492,13 @@ fn fov_for_axis(fov: f32, axis: &str, w: u32, h: u32) -> Option<(f32, FovAxis)> 
 }
 
 /// The mean linear colour of an image file (8- and 16-bit images are sRGB
-/// unless `raw`; float images linear).
-fn bitmap_average(path: &Path, raw: bool) -> std::result::Result<Vec3, String> {
+/// unless `raw`; float images linear), decoded within `memory_limit`.
+fn bitmap_average(path: &Path, raw: bool, memory_limit: Option<u64>) -> std::result::Result<Vec3, String> {
     let bytes = crate::input::read_bytes(path, crate::input::MAX_IMAGE_BYTES).map_err(|e| e.to_string())?;
-    let img = ::image::load_from_memory(&bytes).map_err(|e| format!("cannot decode it ({e}); PNG and JPEG are read"))?;
-    let linear = raw || matches!(img, ::image::DynamicImage::ImageRgb32F(_) | ::image::DynamicImage::ImageRgba32F(_));
-    let rgb = img.to_rgb32f();
-    let n = (rgb.width() as usize * rgb.height() as usize).max(1);
-    let lut: Vec<f32> = (0..=4096).map(|i| crate::image::srgb_to_linear(i as f32 / 4096.0)).collect();
-    let decode = |v: f32| if linear { v } else { lut[(v.clamp(0.0, 1.0) * 4096.0).round() as usize] };
-    let mut sum = glam::DVec3::ZERO;
-    for p in rgb.pixels() {
-        sum += glam::DVec3::new(decode(p[0]) as f64, decode(p[1]) as f64, decode(p[2]) as f64);
-    }
-    Ok((sum / n as f64).as_vec3())
+    let img = crate::bitmap::decode(&bytes, None, memory_limit)?;
+    drop(bytes);
+    let texels = crate::bitmap::texels(&img);
+    Ok(crate::bitmap::mean_colour(texels, !raw, Default::default()).unwrap_or(Vec3::ZERO))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ impl Ctx<'_> {
                 let Some(name) = self.string(s, "filename")? else {
                     return Err(self.doc.err(s.at, format!("{} needs a filename", s.what())));
                 };
-                let path = self.doc.resolve(&name, s.at);
+                let path = self.doc.resolve(&name, s.at)?;
                 let mut mesh = if s.ty == "obj" {
                     let bytes = crate::input::read_bytes(&path, crate::input::MAX_MESH_BYTES)?;
                     // The OBJ's own materials are not Mitsuba's: the shape's BSDF decides.

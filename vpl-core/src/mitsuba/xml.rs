@@ -5,6 +5,7 @@
 
 use crate::error::{CoreError, Result};
 use crate::input::{MAX_TEXT_BYTES, read_text};
+use crate::sandbox::Sandbox;
 use crate::spectral::{SpectrumKind, spectrum_to_rgb};
 use glam::{Mat4, Vec3};
 use std::cell::Cell;
@@ -13,6 +14,19 @@ use std::path::{Path, PathBuf};
 
 /// How deep `<include>`s and objects may nest.
 const MAX_DEPTH: usize = 64;
+
+/// How many `<include>`s one scene may expand, all files together: a file
+/// may include another more than once, so without a bound 40 files that
+/// each include the next twice expand 2⁴⁰ times.
+pub const MAX_INCLUDES: usize = 4096;
+
+/// How much XML text one scene may read, all includes together (256 MiB).
+pub const MAX_SCENE_TEXT: u64 = 256 << 20;
+
+/// The most attributes one element may carry. The XML parser compares each
+/// attribute with the element's earlier ones, so an element with 200,000
+/// of them takes minutes; Mitsuba's elements have at most a handful.
+pub const MAX_ATTRIBUTES: usize = 64;
 
 /// Where something stands: a file (index into [`Document::files`]) and a
 /// 1-based line.
@@ -28,6 +42,8 @@ pub(crate) struct Loc {
 pub(crate) struct Document {
     pub files: Vec<PathBuf>,
     pub objects: Vec<Object>,
+    /// Where the scene's files may be read from.
+    pub sandbox: Sandbox,
 }
 
 impl Document {
@@ -42,19 +58,27 @@ impl Document {
     }
 
     /// A file named by an object at `at`: relative to the scene's folder,
-    /// or else to the folder of the file that names it.
-    pub fn resolve(&self, name: &str, at: Loc) -> PathBuf {
-        let p = Path::new(name);
-        if p.is_absolute() {
-            return p.to_path_buf();
-        }
-        let first = self.scene_dir().join(p);
-        if first.exists() {
-            return first;
-        }
-        let second = parent_dir(&self.files[at.file]).join(p);
-        if second.exists() { second } else { first }
+    /// or else to the folder of the file that names it; inside the sandbox.
+    pub fn resolve(&self, name: &str, at: Loc) -> Result<PathBuf> {
+        let dirs = [self.scene_dir(), parent_dir(&self.files[at.file])];
+        find_file(&self.sandbox, &dirs, name).map_err(|e| self.err(at, e))
     }
+}
+
+/// `name` relative to the first of `dirs` where it exists, through the
+/// sandbox; a line naming the reference when it leaves the sandbox or
+/// exists nowhere.
+fn find_file(sandbox: &Sandbox, dirs: &[PathBuf], name: &str) -> std::result::Result<PathBuf, String> {
+    for dir in dirs {
+        match sandbox.resolve(dir, name) {
+            Ok(p) => return Ok(p),
+            Err(CoreError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e @ CoreError::OutsideScene { .. }) => return Err(e.to_string()),
+            Err(CoreError::Read { source, .. }) => return Err(format!("'{name}': {source}")),
+            Err(e) => return Err(format!("'{name}': {e}")),
+        }
+    }
+    Err(format!("'{name}': no such file"))
 }
 
 pub(crate) fn mitsuba_err(path: &Path, line: u32, reason: String) -> CoreError {
@@ -155,11 +179,18 @@ impl Object {
 
 /// Reads `path` with the parameters `params` (which take precedence over
 /// the file's `<default>`s).
-pub(crate) fn read_document(path: &Path, params: &[(String, String)]) -> Result<Document> {
-    let mut r = DocReader { files: Vec::new(), params: params.iter().cloned().collect(), open: Vec::new() };
+pub(crate) fn read_document(path: &Path, params: &[(String, String)], sandbox: &Sandbox) -> Result<Document> {
+    let mut r = DocReader {
+        files: Vec::new(),
+        params: params.iter().cloned().collect(),
+        open: Vec::new(),
+        sandbox: sandbox.clone(),
+        includes: 0,
+        text: 0,
+    };
     let mut objects = Vec::new();
     r.scene_file(path, &mut objects, 0)?;
-    Ok(Document { files: r.files, objects })
+    Ok(Document { files: r.files, objects, sandbox: r.sandbox })
 }
 
 struct DocReader {
@@ -167,6 +198,11 @@ struct DocReader {
     params: HashMap<String, String>,
     /// Files being read (an include cycle is an error).
     open: Vec<PathBuf>,
+    sandbox: Sandbox,
+    /// `<include>`s expanded so far.
+    includes: usize,
+    /// Bytes of XML read so far.
+    text: u64,
 }
 
 /// Object tags the reader knows; others are errors.
@@ -180,6 +216,13 @@ impl DocReader {
             return Err(mitsuba_err(path, 0, "includes itself (an <include> cycle)".into()));
         }
         let text = read_text(path, MAX_TEXT_BYTES)?;
+        self.text += text.len() as u64;
+        if self.text > MAX_SCENE_TEXT {
+            return Err(mitsuba_err(path, 0, format!("the scene and its includes hold more than {MAX_SCENE_TEXT} bytes of XML")));
+        }
+        check_attribute_counts(&text).map_err(|(line, n)| {
+            mitsuba_err(path, line, format!("an element has {n} attributes or more; at most {MAX_ATTRIBUTES} are read"))
+        })?;
         let file = self.files.len();
         self.files.push(path.to_path_buf());
         let doc = roxmltree::Document::parse(&text).map_err(|e| mitsuba_err(path, e.pos().row, format!("not well-formed XML: {e}")))?;
@@ -226,15 +269,13 @@ impl DocReader {
                     if depth >= MAX_DEPTH {
                         return Err(err(format!("<include>s nest deeper than {MAX_DEPTH}")));
                     }
+                    self.includes += 1;
+                    if self.includes > MAX_INCLUDES {
+                        return Err(err(format!("the scene expands more than {MAX_INCLUDES} <include>s")));
+                    }
                     let name = self.attr(n, "filename", path, at)?.ok_or_else(|| err("<include> needs a filename".into()))?;
-                    let p = Path::new(&name);
-                    let mut target = parent_dir(path).join(p);
-                    if !target.exists() {
-                        target = parent_dir(&self.files[0]).join(p);
-                    }
-                    if !target.exists() {
-                        return Err(err(format!("<include filename=\"{name}\">: no such file")));
-                    }
+                    let dirs = [parent_dir(path), parent_dir(&self.files[0])];
+                    let target = find_file(&self.sandbox, &dirs, &name).map_err(|r| err(format!("<include>: {r}")))?;
                     self.scene_file(&target, out, depth + 1)?;
                 }
                 tag if OBJECT_TAGS.contains(&tag) => out.push(self.object(n, path, file, loc, 0)?),
@@ -458,4 +499,62 @@ pub(crate) fn colour(v: &Value, kind: SpectrumKind) -> Option<Vec3> {
         Value::Spectrum(s) => spectrum_to_rgb(s, kind),
         _ => None,
     }
+}
+
+/// Refuses XML whose elements carry more than [`MAX_ATTRIBUTES`]
+/// attributes, before it is parsed: the line of the first such element and
+/// the count reached. A scan of the tags' `=` signs outside quoted values
+/// (comments, CDATA and processing instructions skipped), linear in the text.
+fn check_attribute_counts(text: &str) -> std::result::Result<(), (u32, usize)> {
+    let b = text.as_bytes();
+    let (mut i, mut line) = (0usize, 1u32);
+    while i < b.len() {
+        match b[i] {
+            b'\n' => line += 1,
+            b'<' => {
+                let rest = &b[i..];
+                let skip_to = |end: &[u8]| rest.windows(end.len()).position(|w| w == end).map(|p| p + end.len());
+                let skipped = if rest.starts_with(b"<!--") {
+                    skip_to(b"-->")
+                } else if rest.starts_with(b"<![CDATA[") {
+                    skip_to(b"]]>")
+                } else if rest.starts_with(b"<?") {
+                    skip_to(b"?>")
+                } else if rest.starts_with(b"<!") {
+                    skip_to(b">")
+                } else {
+                    None
+                };
+                if let Some(n) = skipped {
+                    line += rest[..n].iter().filter(|&&c| c == b'\n').count() as u32;
+                    i += n;
+                    continue;
+                }
+                // An element tag: count `=` outside quotes up to its `>`.
+                let (start, mut count, mut quote) = (line, 0usize, None::<u8>);
+                i += 1;
+                while i < b.len() {
+                    let c = b[i];
+                    match (quote, c) {
+                        (_, b'\n') => line += 1,
+                        (Some(q), c) if c == q => quote = None,
+                        (Some(_), _) => {}
+                        (None, b'"' | b'\'') => quote = Some(c),
+                        (None, b'=') => {
+                            count += 1;
+                            if count > MAX_ATTRIBUTES {
+                                return Err((start, count));
+                            }
+                        }
+                        (None, b'>') => break,
+                        _ => {}
+                    }
+                    i += 1;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
 }

@@ -4,7 +4,6 @@
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
-use vpl_core::image::write_png_rgb8;
 
 /// DejaVu Sans Mono (Bitstream Vera licence: `assets/DejaVuSansMono-LICENSE.txt`).
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
@@ -103,11 +102,18 @@ fn tick(v: f64) -> String {
 
 /// Draws `series` into `path` (PNG, written atomically).
 pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), PlotError> {
+    let png = line_chart_png(&path.display().to_string(), chart, series)?;
+    vpl_core::image::write_atomic(path, &png)?;
+    Ok(())
+}
+
+/// The PNG file of [`line_chart`], in memory (`name` names it in errors).
+pub fn line_chart_png(name: &str, chart: &Chart, series: &[Series]) -> Result<Vec<u8>, PlotError> {
     REGISTER.call_once(|| {
         // The font is part of the binary; failing to parse it is a build defect.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
     });
-    let name = path.display().to_string();
+    let name = name.to_string();
     let draw = |e: &dyn std::fmt::Display| PlotError::Draw(name.clone(), e.to_string());
     let (log_x, log_y) = chart.log;
     let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)), log_x).ok_or_else(|| PlotError::Empty(name.clone()))?;
@@ -161,8 +167,7 @@ pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), P
         }
         root.present().map_err(|e| draw(&e))?;
     }
-    write_png_rgb8(path, w, h, &buf)?;
-    Ok(())
+    vpl_core::image::encode_png_rgb8(w, h, &buf).map_err(|e| PlotError::Draw(name, e))
 }
 
 #[cfg(test)]

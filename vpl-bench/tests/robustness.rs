@@ -150,6 +150,18 @@ fn memory_and_threads_are_decided_before_the_work() {
     let o = render(&[&vpl_args[..], &["--vpls", "2048", "--shadowmap-res", "4096"]].concat(), &out);
     refused(&o, "--shadowmap-res)", "4096² maps");
     assert!(String::from_utf8_lossy(&o.stderr).contains("128."), "{}", String::from_utf8_lossy(&o.stderr));
+    // Camera samples: weighed in the estimate, and past 2²⁴ refused as a
+    // parameter (a "capacity overflow" abort before).
+    let tcas = ["--scene", "cornell", "--method", "vpl", "--sampler", "tcas"];
+    let o = render(&[&tcas[..], &["--camera-samples", "100000000", "--memory-limit", "1G"]].concat(), &out);
+    refused(&o, "(--camera-samples)", "10^8 camera samples");
+    for sampler in ["tcas", "mir", "rr"] {
+        let o = render(
+            &["--scene", "cornell", "--method", "vpl", "--sampler", sampler, "--camera-samples", "4294967296", "--memory-limit", "1000T"],
+            &out,
+        );
+        refused(&o, "camera-samples", "2^32 camera samples");
+    }
     refused(&render(&["--scene", "cornell", "--threads", "100000"], &out), "--threads 100000", "threads");
     refused(&render(&["--scene", "cornell", "--memory-limit", "lots"], &out), "memory limit 'lots'", "limit syntax");
     // The summary reports the estimate beside the peak.

@@ -79,6 +79,15 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 3, total: 7, .. })));
     let b = table1::run(&reg, &spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
     assert_eq!((a.ran, b.ran), (4, 3));
+    // A merge that fails on its last output writes none of them (the old
+    // merge left table1.md, .csv, .json, runs.csv and cost.md behind).
+    std::fs::create_dir(split.join("fig7.csv")).unwrap();
+    let e = table1::merge(&split).unwrap_err().to_string();
+    assert!(e.contains("fig7.csv") && e.contains("a directory"), "{e}");
+    let mut left: Vec<String> = std::fs::read_dir(&split).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    left.sort();
+    assert_eq!(left, ["fig7.csv", "spec.json", "units"], "a failed merge left files");
+    std::fs::remove_dir(split.join("fig7.csv")).unwrap();
     table1::merge(&split).unwrap();
     for f in ["table1.json", "table1.md", "table1.csv", "fig7.csv"] {
         assert!(read(&whole, f) == read(&split, f), "{f} differs between the whole and the sharded run");
@@ -100,6 +109,18 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     std::fs::copy(small.join("units/maze/ir_seed1.json"), whole.join("units/maze/ir_seed1.json")).unwrap();
     let e = table1::merge(&whole).unwrap_err().to_string();
     assert!(e.contains("ir_seed1.json") && e.contains("size"), "{e}");
+    // A number beyond single precision (it read as infinity, and the table
+    // printed inf and NaN with success) is refused naming the unit; the
+    // earlier results stay as they were.
+    let before = read(&whole, "table1.md");
+    std::fs::copy(split.join("units/maze/ir_seed1.json"), whole.join("units/maze/ir_seed1.json")).unwrap();
+    let unit = whole.join("units/maze/smc_seed0.json");
+    let mut v: serde_json::Value = serde_json::from_str(&read(&whole, "units/maze/smc_seed0.json")).unwrap();
+    v["tracked"][0][0][0] = serde_json::json!(1e39);
+    std::fs::write(&unit, serde_json::to_string(&v).unwrap()).unwrap();
+    let e = table1::merge(&whole).unwrap_err().to_string();
+    assert!(e.contains("smc_seed0.json") && e.contains("not a finite single-precision number"), "{e}");
+    assert_eq!(read(&whole, "table1.md"), before);
     std::fs::remove_dir_all(&small).unwrap();
     std::fs::remove_dir_all(&whole).unwrap();
     std::fs::remove_dir_all(&split).unwrap();
@@ -116,6 +137,16 @@ fn specs_and_shards_are_checked() {
     let mut s = tiny();
     s.rows[0].id = "sponza-crytek".into();
     assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("unknown sequence"));
+    // 10,000 methods exhausted memory; a method or sequence listed twice is refused too.
+    let mut s = tiny();
+    s.methods = (0..10_000).map(|i| format!("m{i}")).collect();
+    assert!(s.validate_settings().unwrap_err().to_string().contains("at most 64 methods"));
+    let mut s = tiny();
+    s.methods = vec!["ir".into(), "ir".into()];
+    assert!(s.validate_settings().unwrap_err().to_string().contains("'ir' is listed twice"));
+    let mut s = tiny();
+    s.rows.push(s.rows[0].clone());
+    assert!(s.validate_settings().unwrap_err().to_string().contains("'maze' is listed twice"));
     let mut s = tiny();
     s.seeds = 0;
     assert!(s.validate(&Registry::builtin()).unwrap_err().to_string().contains("seeds"));

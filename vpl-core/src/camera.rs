@@ -83,8 +83,21 @@ impl Camera {
         if !(lens_radius >= 0.0) || !(focus_distance > 0.0) {
             return Err(CoreError::Camera("lens radius must be ≥ 0 and focus distance > 0".into()));
         }
+        // Lens points and focus points are scene positions: within the
+        // scene's coordinate bound, so that the distance between two of them
+        // squares to a finite f32 (a lens radius of 10²⁰ gave rays of zero
+        // direction, whose traversal never ended).
+        let bound = crate::validate::MAX_COORDINATE;
+        if lens_radius > bound || focus_distance > bound {
+            return Err(CoreError::Camera(format!(
+                "lens radius {lens_radius} and focus distance {focus_distance} must be at most {bound:e} (the scene's coordinate bound)"
+            )));
+        }
         if !(origin.is_finite() && target.is_finite() && up.is_finite()) {
             return Err(CoreError::Camera("camera origin, target and up must be finite".into()));
+        }
+        if origin.abs().max_element() > bound || target.abs().max_element() > bound {
+            return Err(CoreError::Camera(format!("camera origin and target must lie within ±{bound:e} on every axis")));
         }
         let forward = (target - origin).normalize_or_zero();
         let right = forward.cross(up).normalize_or_zero();
@@ -212,5 +225,25 @@ mod tests {
         assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (0, 2)).is_err());
         assert!(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (2, MAX_RESOLUTION + 1)).is_err());
         assert!(Camera::new(Vec3::Z, Vec3::Z, Vec3::Y, 40.0, FovAxis::X, (2, 2)).is_err());
+    }
+
+    /// A lens of radius 10²⁰ made lens points whose distance to the focus
+    /// point squares past f32: rays of zero direction. Such lenses, and
+    /// cameras beyond the scene's coordinate bound, are refused; every ray
+    /// of the largest allowed lens has a unit direction.
+    #[test]
+    fn lenses_and_positions_beyond_the_coordinate_bound_are_refused() {
+        let lens = |r: f32, f: f32| Camera::thin_lens(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (4, 4), r, f);
+        for (r, f) in [(1e20, 1.0), (1.0, 1e20), (f32::INFINITY, 1.0)] {
+            let e = lens(r, f).unwrap_err().to_string();
+            assert!(e.contains("lens radius") && e.contains("coordinate bound") || e.contains("≥ 0"), "{r} {f}: {e}");
+        }
+        let far = Camera::new(Vec3::new(0.0, 0.0, 1e11), Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (2, 2)).unwrap_err();
+        assert!(far.to_string().contains("within ±"), "{far}");
+        let widest = lens(crate::validate::MAX_COORDINATE, 1.0).unwrap();
+        for u in [(0.0, 0.0), (0.99, 0.5), (0.5, 0.99)] {
+            let d = widest.ray(1.0, 3.0, u).d;
+            assert!(d.is_finite() && (d.length() - 1.0).abs() < 1e-3, "{d}");
+        }
     }
 }

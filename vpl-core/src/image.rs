@@ -139,7 +139,14 @@ impl Image {
 #[cfg(feature = "formats")]
 /// Writes 8-bit RGB pixels (row-major, 3 bytes a pixel) as a PNG, atomically.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    let err = |e: png::EncodingError| CoreError::Write { path: path.into(), reason: e.to_string() };
+    let out = encode_png_rgb8(width, height, rgb).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
+    write_atomic(path, &out)
+}
+
+#[cfg(feature = "formats")]
+/// The PNG file of 8-bit RGB pixels (row-major, 3 bytes a pixel).
+pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let err = |e: png::EncodingError| e.to_string();
     let mut out = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut out, width, height);
@@ -148,7 +155,7 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
         let mut w = enc.write_header().map_err(err)?;
         w.write_image_data(rgb).map_err(err)?;
     }
-    write_atomic(path, &out)
+    Ok(out)
 }
 
 /// Luminance (Rec. 709 / sRGB primaries).
@@ -287,6 +294,145 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     result.map_err(|e| err(e.to_string()))
 }
 
+/// The outputs of one command, written together: each is staged to a
+/// temporary beside its final name ([`Staging::stage`]), and only when all
+/// are staged are they renamed into place ([`Staging::commit`]). A command
+/// that fails before the commit, or is interrupted, leaves every earlier
+/// file as it was: the staged temporaries are removed (on drop, and by
+/// [`remove_temporaries`] from a signal handler). During the commit, a file
+/// that is replaced is first kept under a backup name; if a rename fails,
+/// the files already replaced are restored from their backups and the new
+/// ones removed, so the folder is as before the command.
+#[derive(Debug, Default)]
+pub struct Staging {
+    /// (final path, staged temporary) in staging order.
+    staged: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Staging {
+    /// No outputs yet.
+    pub fn new() -> Staging {
+        Staging::default()
+    }
+
+    /// Stages `bytes` as the future content of `path` (checked as
+    /// [`write_atomic`] checks it). Staging the same path twice is an error.
+    pub fn stage(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
+        let err = |reason: String| CoreError::Write { path: path.into(), reason };
+        if self.staged.iter().any(|(p, _)| p == path) {
+            return Err(err("the command writes it twice".into()));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if !dir.is_dir() {
+            return Err(err(format!("directory {} does not exist", dir.display())));
+        }
+        check_replaceable(path)?;
+        let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
+        remove_stale_temporaries(&dir, &name);
+        let tmp = dir.join(temporary_name(&name, std::process::id()));
+        IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
+        let written = (|| -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != &tmp);
+            return Err(err(e.to_string()));
+        }
+        self.staged.push((path.to_path_buf(), tmp));
+        Ok(())
+    }
+
+    /// The paths staged so far.
+    pub fn paths(&self) -> impl Iterator<Item = &Path> {
+        self.staged.iter().map(|(p, _)| p.as_path())
+    }
+
+    /// Renames every staged output into place, all or none (see the type).
+    pub fn commit(mut self) -> Result<()> {
+        let staged = std::mem::take(&mut self.staged);
+        // (final path, its backup if it existed)
+        let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
+        let mut failure = None;
+        for (path, tmp) in &staged {
+            let backup = path.with_file_name(format!(
+                "{}{}.bak",
+                temporary_stem(&path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
+                std::process::id()
+            ));
+            // What took the output's place since it was staged is checked again.
+            if let Err(e) = check_replaceable(path) {
+                failure = Some(e);
+                break;
+            }
+            let kept = match std::fs::symlink_metadata(path) {
+                Ok(_) => match std::fs::rename(path, &backup) {
+                    Ok(()) => Some(backup),
+                    Err(e) => {
+                        failure = Some(CoreError::Write { path: path.clone(), reason: e.to_string() });
+                        break;
+                    }
+                },
+                Err(_) => None,
+            };
+            if let Err(e) = std::fs::rename(tmp, path) {
+                if let Some(b) = &kept {
+                    let _ = std::fs::rename(b, path);
+                }
+                failure = Some(CoreError::Write { path: path.clone(), reason: e.to_string() });
+                break;
+            }
+            done.push((path.clone(), kept));
+        }
+        let mut in_flight = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+        for (_, tmp) in &staged {
+            let _ = std::fs::remove_file(tmp);
+            in_flight.retain(|p| p != tmp);
+        }
+        drop(in_flight);
+        match failure {
+            None => {
+                for (_, backup) in done {
+                    if let Some(b) = backup {
+                        let _ = std::fs::remove_file(b);
+                    }
+                }
+                Ok(())
+            }
+            Some(e) => {
+                // Back to the folder as it was: new files removed, replaced ones restored.
+                for (path, backup) in done.into_iter().rev() {
+                    match backup {
+                        Some(b) => {
+                            let _ = std::fs::rename(b, &path);
+                        }
+                        None => {
+                            let _ = std::fs::remove_file(&path);
+                        }
+                    }
+                }
+                Err(e)
+            }
+        }
+    }
+}
+
+impl Drop for Staging {
+    /// Outputs never committed are removed.
+    fn drop(&mut self) {
+        let mut in_flight = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+        for (_, tmp) in self.staged.drain(..) {
+            let _ = std::fs::remove_file(&tmp);
+            in_flight.retain(|p| p != &tmp);
+        }
+    }
+}
+
 /// Refuses an output path that exists and is no regular file (see
 /// [`write_atomic`]). A symbolic link is refused whatever it points to: the
 /// rename would replace the link, not write where it points.
@@ -309,6 +455,49 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A command whose last output fails leaves the folder as it was: the
+    /// earlier outputs are not written (a failed stage) or are restored (a
+    /// failed commit), and no temporary stays.
+    #[test]
+    fn staged_outputs_are_written_all_or_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+        std::fs::write(&a, "old a").unwrap();
+        // A stage that fails (its folder is missing): nothing is touched.
+        let mut s = Staging::new();
+        s.stage(&a, b"new a").unwrap();
+        assert!(s.stage(&dir.path().join("missing/c.txt"), b"c").is_err());
+        drop(s);
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        let names = || {
+            let mut v: Vec<String> =
+                std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+            v.sort();
+            v
+        };
+        assert_eq!(names(), ["a.txt"]);
+        // A commit that fails on its second rename (a folder took b's place
+        // after staging): a is restored, b never appears.
+        let mut s = Staging::new();
+        s.stage(&a, b"new a").unwrap();
+        s.stage(&b, b"new b").unwrap();
+        std::fs::create_dir(&b).unwrap();
+        std::fs::write(b.join("x"), "x").unwrap();
+        assert!(s.commit().is_err());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        std::fs::remove_dir_all(&b).unwrap();
+        assert_eq!(names(), ["a.txt"]);
+        // Both staged, both committed.
+        let mut s = Staging::new();
+        s.stage(&a, b"new a").unwrap();
+        s.stage(&b, b"new b").unwrap();
+        assert!(s.stage(&b, b"again").is_err());
+        s.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");
+        assert_eq!(names(), ["a.txt", "b.txt"]);
+    }
 
     #[test]
     #[cfg(feature = "formats")]

@@ -24,6 +24,10 @@
 use std::cell::Cell;
 use std::fmt;
 
+/// The largest count [`Params::count_or`] accepts (2²⁴ = 16,777,216: a
+/// thousand times the papers' largest settings).
+pub const MAX_COUNT: u64 = 1 << 24;
+
 /// Errors of reading parameters; each names the key.
 #[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
 pub enum ParamError {
@@ -216,14 +220,21 @@ impl Params {
         Ok(self.get(key)?.unwrap_or(default))
     }
 
-    /// [`Params::get_or`] for a count that must be at least `least`.
+    /// [`Params::get_or`] for a count that must be at least `least` and
+    /// at most [`MAX_COUNT`].
+    ///
+    /// Counts size buffers and loops (camera samples, chains, paths a VPL);
+    /// the upper bound keeps every one of them inside what a memory
+    /// estimate can weigh, so `camera-samples=4294967296` is one error
+    /// line rather than a "capacity overflow" abort.
     pub fn count_or<T>(&self, key: &str, default: T, least: T) -> Result<T, ParamError>
     where
-        T: FromParam + PartialOrd + fmt::Display + Copy,
+        T: FromParam + PartialOrd + fmt::Display + Copy + TryInto<u64>,
     {
         let v = self.get_or(key, default)?;
-        if v < least {
-            return Err(self.out_of_range(key, v, format!("at least {least}")));
+        let too_many = v.try_into().map_or(true, |n| n > MAX_COUNT);
+        if v < least || too_many {
+            return Err(self.out_of_range(key, v, format!("from {least} to {MAX_COUNT}")));
         }
         Ok(v)
     }
@@ -311,10 +322,15 @@ mod tests {
     }
 
     #[test]
-    fn counts_check_their_least_value() {
+    fn counts_check_their_least_and_largest_value() {
         let p = Params::parse(["n=0"]).unwrap();
         let e = p.count_or("n", 4usize, 1).unwrap_err();
-        assert_eq!(e.to_string(), "n=0: must be at least 1");
+        assert_eq!(e.to_string(), "n=0: must be from 1 to 16777216");
         assert_eq!(Params::new().count_or("n", 4usize, 1).unwrap(), 4);
+        // 2³² camera samples aborted with "capacity overflow"; 2²⁴ is the bound.
+        let p = Params::parse(["n=4294967296"]).unwrap();
+        assert_eq!(p.count_or("n", 4usize, 1).unwrap_err().to_string(), "n=4294967296: must be from 1 to 16777216");
+        let p = Params::parse(["n=16777216"]).unwrap();
+        assert_eq!(p.count_or("n", 4u64, 1).unwrap(), 1 << 24);
     }
 }

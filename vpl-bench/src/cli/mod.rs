@@ -656,7 +656,18 @@ fn pipeline_spec(
 /// SMC's area probes.
 fn with_sampler_memory(estimate: vpl_render::MemoryEstimate, spec: &crate::pipeline::PipelineSpec) -> vpl_render::MemoryEstimate {
     // A copy of the parameters: reading them here must not mark them read for the build.
-    let Some(Ok(c)) = vpl_sampling::smc_config(&spec.sampler, &spec.budget, &spec.params.clone()) else { return estimate };
+    let params = spec.params.clone();
+    // The camera samples of TCAS, MIR and RR: one importon each, cast per frame.
+    let camera_samples: u64 = params.get_or("camera-samples", 0u64).unwrap_or(0);
+    let estimate = match camera_samples {
+        0 => estimate,
+        n => estimate.with_part(
+            format!("camera samples: {n} importons"),
+            n.saturating_mul(std::mem::size_of::<vpl_core::importons::Importon>() as u64),
+            &["camera-samples"],
+        ),
+    };
+    let Some(Ok(c)) = vpl_sampling::smc_config(&spec.sampler, &spec.budget, &params) else { return estimate };
     match c.probe_memory() {
         0 => estimate,
         bytes => estimate.with_part(

@@ -210,6 +210,25 @@ impl Table1Spec {
         if self.rows.is_empty() || self.methods.is_empty() {
             return Err(Table1Error::Invalid("a run needs at least one sequence and one method".into()));
         }
+        // Each (row, method, seed) is a unit and a column of the report;
+        // a spec of 10,000 methods would plan and merge 10,000 of each.
+        if self.methods.len() > MAX_METHODS || self.rows.len() > MAX_ROWS {
+            return Err(Table1Error::Invalid(format!(
+                "{} methods and {} sequences: a run takes at most {MAX_METHODS} methods and {MAX_ROWS} sequences",
+                self.methods.len(),
+                self.rows.len()
+            )));
+        }
+        for (i, m) in self.methods.iter().enumerate() {
+            if self.methods[..i].contains(m) {
+                return Err(Table1Error::Invalid(format!("the method '{m}' is listed twice")));
+            }
+        }
+        for (i, r) in self.rows.iter().enumerate() {
+            if self.rows[..i].iter().any(|q| q.id == r.id) {
+                return Err(Table1Error::Invalid(format!("the sequence '{}' is listed twice", r.id)));
+            }
+        }
         for r in &self.rows {
             let row = rows::row(&r.id)
                 .ok_or_else(|| Table1Error::Invalid(format!("unknown sequence '{}' (sequences: {})", r.id, row_ids().join(", "))))?;
@@ -388,6 +407,21 @@ pub struct UnitSettings {
 impl UnitSettings {
     fn of(spec: &Table1Spec) -> UnitSettings {
         UnitSettings { hash: spec.hash(), spec: spec.clone() }
+    }
+}
+
+/// The most methods one run compares (the registry has a dozen).
+pub const MAX_METHODS: usize = 64;
+/// The most sequences one run holds (Table 1 has seven).
+pub const MAX_ROWS: usize = 64;
+
+/// Refuses a unit whose numbers are not finite: JSON numbers beyond the
+/// range of `f32` read as infinities, and would print as `inf` and `NaN`
+/// in the table.
+fn check_finite<'a>(path: &Path, what: &str, values: impl IntoIterator<Item = &'a [f32; 3]>) -> Result<(), Table1Error> {
+    match values.into_iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+        Some(i) => Err(Table1Error::Unit(path.into(), format!("{what} {i} is not a finite single-precision number"))),
+        None => Ok(()),
     }
 }
 
@@ -700,6 +734,14 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
             let path = dir.join(spec.unit_file(Unit::Truth { row: ri, frame: f }));
             let t: TruthUnit = read_json(&path)?;
             check_unit(&path, &t.settings, &spec)?;
+            check_finite(&path, "mean", &t.mean)?;
+            check_finite(&path, "stderr", &t.stderr)?;
+            if t.mean.len() != row.tracked.len() || t.stderr.len() != row.tracked.len() {
+                return Err(Table1Error::Unit(
+                    path,
+                    format!("it holds {} pixels, the sequence tracks {}", t.mean.len(), row.tracked.len()),
+                ));
+            }
             row_truth = row_truth.filter(|_| t.seconds > 0.0).map(|s| s + t.seconds);
             truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
             for (m, s) in t.mean.iter().zip(&t.stderr) {
@@ -720,6 +762,10 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
                 let path = dir.join(spec.unit_file(Unit::Method { row: ri, method: mi, seed }));
                 let u: MethodUnit = read_json(&path)?;
                 check_unit(&path, &u.settings, &spec)?;
+                check_finite(&path, "tracked value", u.tracked.iter().flatten())?;
+                if !(u.seconds.is_finite() && u.ms.iter().flatten().all(|x| x.is_finite())) {
+                    return Err(Table1Error::Unit(path, "a time is not a finite number".into()));
+                }
                 if u.frames.len() != truth.len() || u.tracked.iter().any(|f| f.len() != pixels) {
                     return Err(Table1Error::Unit(path, "frame or pixel count differs from the spec".into()));
                 }

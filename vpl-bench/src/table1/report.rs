@@ -5,11 +5,10 @@
 use super::rows::{self, PAPER_METHODS};
 use super::stats::{Interval, REPLICATES};
 use super::{MethodUnit, RowResult, Table1Error, Table1Results};
-use crate::plot::{Chart, Series, line_chart, method_color};
+use crate::plot::{Chart, Series, line_chart_png, method_color};
 use crate::stages::median;
 use std::fmt::Write as _;
 use std::path::Path;
-use vpl_core::image::write_atomic;
 
 /// The sequences Fig. 7 plots, as the paper: Citadel with the moving sun, Soda Hall, Maze.
 pub const FIG7_ROWS: [&str; 3] = ["courtyard-sun", "office", "maze"];
@@ -282,7 +281,11 @@ pub fn runs_csv(runs: &[MethodUnit]) -> String {
 /// Fig. 7: the tracked pixel's luminance over time, per method against
 /// ground truth, for the rows of [`FIG7_ROWS`] in the run: one line per
 /// seed in the method's colour, so the spread across runs shows.
-fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
+/// Files made in memory: (path, bytes).
+type Files = Vec<(std::path::PathBuf, Vec<u8>)>;
+
+fn fig7(dir: &Path, r: &Table1Results) -> Result<(String, Files), Table1Error> {
+    let mut pngs = Vec::new();
     let mut data = String::from("sequence,pixel,x,y,frame,time,method,seed,luminance\n");
     for row in r.rows.iter().filter(|row| FIG7_ROWS.contains(&row.id.as_str())) {
         let def = rows::row(&row.id).expect("known row");
@@ -315,9 +318,11 @@ fn fig7(dir: &Path, r: &Table1Results) -> Result<String, Table1Error> {
         let runs = if r.spec.seeds > 1 { format!(", {} seeds each", r.spec.seeds) } else { String::new() };
         let title = format!("{} ({} VPLs{runs}), pixel {k} ({x}, {y}): {label}", row.id, row.vpls);
         let chart = Chart { title: &title, x_label: "seconds", y_label: "luminance (Reinhard)", log: (false, false), size: (960, 420) };
-        line_chart(&dir.join(format!("fig7_{}.png", row.id)), &chart, &series)?;
+        let path = dir.join(format!("fig7_{}.png", row.id));
+        let png = line_chart_png(&path.display().to_string(), &chart, &series)?;
+        pngs.push((path, png));
     }
-    Ok(data)
+    Ok((data, pngs))
 }
 
 /// The estimate's line: "… h for the full profile (… method runs, …
@@ -367,15 +372,26 @@ fn cost_md(runs: &[MethodUnit], cost: Option<&super::estimate::FullEstimate>) ->
     md
 }
 
-/// Writes every Table 1 file into `dir`.
+/// Writes every Table 1 file into `dir`, all or none: every file is made
+/// and staged first, then all are renamed into place
+/// ([`vpl_core::image::Staging`]), so a merge that fails leaves the
+/// folder's earlier results as they were.
 pub fn write(dir: &Path, r: &Table1Results, runs: &[MethodUnit], cost: Option<&super::estimate::FullEstimate>) -> Result<(), Table1Error> {
-    write_atomic(&dir.join("table1.md"), markdown(r).as_bytes())?;
-    write_atomic(&dir.join("table1.csv"), csv(r).as_bytes())?;
     let json = serde_json::to_string_pretty(r).map_err(|e| Table1Error::Invalid(e.to_string()))?;
-    write_atomic(&dir.join("table1.json"), json.as_bytes())?;
-    write_atomic(&dir.join("runs.csv"), runs_csv(runs).as_bytes())?;
-    write_atomic(&dir.join("cost.md"), cost_md(runs, cost).as_bytes())?;
-    let data = fig7(dir, r)?;
-    write_atomic(&dir.join("fig7.csv"), data.as_bytes())?;
+    let (data, pngs) = fig7(dir, r)?;
+    let mut files: Files = vec![
+        (dir.join("table1.md"), markdown(r).into_bytes()),
+        (dir.join("table1.csv"), csv(r).into_bytes()),
+        (dir.join("table1.json"), json.into_bytes()),
+        (dir.join("runs.csv"), runs_csv(runs).into_bytes()),
+        (dir.join("cost.md"), cost_md(runs, cost).into_bytes()),
+        (dir.join("fig7.csv"), data.into_bytes()),
+    ];
+    files.extend(pngs);
+    let mut staging = vpl_core::image::Staging::new();
+    for (path, bytes) in &files {
+        staging.stage(path, bytes)?;
+    }
+    staging.commit()?;
     Ok(())
 }

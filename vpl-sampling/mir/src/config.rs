@@ -53,6 +53,9 @@ impl MirConfig {
         if self.camera_samples == 0 || self.chains == 0 || self.mutations == 0 || self.bootstrap == Some(0) {
             return Err(MirError::Invalid("camera samples, chains, mutations and bootstrap paths must be at least 1"));
         }
+        if self.camera_samples as u64 > vpl_core::params::MAX_COUNT {
+            return Err(MirError::Invalid("camera samples must be at most 2^24"));
+        }
         if !((0.0..=1.0).contains(&self.large_step) && self.defensive.is_finite() && self.defensive >= 0.0) {
             return Err(MirError::Invalid("the large-step probability must be in [0, 1] and the defensive share at least 0"));
         }

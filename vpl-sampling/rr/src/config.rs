@@ -37,8 +37,8 @@ impl RrConfig {
         if !(self.epsilon > 0.0 && self.epsilon <= 1.0) {
             return Err(RrError::Invalid("epsilon must be in (0, 1]"));
         }
-        if self.camera_samples == 0 {
-            return Err(RrError::Invalid("at least 1 camera sample is needed"));
+        if self.camera_samples == 0 || self.camera_samples as u64 > vpl_core::params::MAX_COUNT {
+            return Err(RrError::Invalid("camera samples must be from 1 to 2^24"));
         }
         if self.max_candidates_factor == 0 || self.vpls.checked_mul(self.max_candidates_factor).is_none_or(|n| n > 1 << 26) {
             return Err(RrError::Invalid("I times the candidate factor must be in 1..=2^26"));

@@ -30,6 +30,9 @@ impl TcasConfig {
         if self.vpls == 0 || self.iterations == 0 || self.camera_samples == 0 {
             return Err(TcasError::Invalid("budget, iterations and camera samples must be at least 1"));
         }
+        if self.camera_samples as u64 > vpl_core::params::MAX_COUNT {
+            return Err(TcasError::Invalid("camera samples must be at most 2^24"));
+        }
         if !(1..=4096).contains(&self.rsm_res) {
             return Err(TcasError::Invalid("the RSM resolution must be in 1..=4096"));
         }

@@ -267,3 +267,73 @@ fn an_interrupted_render_leaves_nothing() {
     assert!(files(&d).is_empty(), "{:?}", files(&d));
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// Every file under `dir` with its bytes, for comparing a folder before
+/// and after a command.
+#[cfg(unix)]
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            for (n, b) in snapshot(&p) {
+                out.push((format!("{}/{n}", e.file_name().to_string_lossy()), b));
+            }
+        } else {
+            out.push((e.file_name().to_string_lossy().into_owned(), std::fs::read(&p).unwrap()));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A sequence into a folder that holds an earlier run, stopped by SIGTERM
+/// at several moments: the exit code is 130 and the folder holds exactly
+/// the earlier run's files, byte for byte (before, the new frames replaced
+/// the old ones as they were rendered and stayed; a signal during a write
+/// ended in "cannot write" with exit 2, or left a temporary).
+#[test]
+#[cfg(unix)]
+fn an_interrupted_sequence_leaves_the_earlier_run_as_it_was() {
+    let d = scratch("sigterm-sequence");
+    let out = d.join("run");
+    let first = vpl()
+        .args(["sequence", "--scene", "cornell", "--size", "16x12", "--vpls", "64", "--frames", "0..2", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let before = snapshot(&out);
+    assert!(before.len() >= 3, "{:?}", before.iter().map(|f| &f.0).collect::<Vec<_>>());
+    for delay_ms in [700, 1500, 2600] {
+        let child = vpl()
+            .args([
+                "sequence",
+                "--scene",
+                "cornell",
+                "--size",
+                "96x72",
+                "--vpls",
+                "256",
+                "--frames",
+                "0..400",
+                "--threads",
+                "1",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&out)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(130), "after {delay_ms} ms: {err}");
+        assert!(err.contains("interrupted") && !err.contains("cannot write"), "{err}");
+        let after = snapshot(&out);
+        assert!(after == before, "after {delay_ms} ms the folder changed: {:?}", after.iter().map(|f| &f.0).collect::<Vec<_>>());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

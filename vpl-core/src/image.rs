@@ -127,12 +127,19 @@ impl Image {
     /// `exposure` scales radiance before tone mapping.
     pub fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> Result<()> {
         let path = path.as_ref();
+        let png = self.encode_png(exposure).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
+        write_atomic(path, &png)
+    }
+
+    #[cfg(feature = "formats")]
+    /// The PNG file [`Image::write_png`] writes, in memory.
+    pub fn encode_png(&self, exposure: f32) -> std::result::Result<Vec<u8>, String> {
         let mut rgb = Vec::with_capacity(self.data.len() * 3);
         for p in &self.data {
             let c = linear_to_srgb(reinhard(*p * exposure));
             rgb.extend([c.x, c.y, c.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8));
         }
-        write_png_rgb8(path, self.width, self.height, &rgb)
+        encode_png_rgb8(self.width, self.height, &rgb)
     }
 }
 
@@ -197,8 +204,35 @@ pub fn preview_path(path: &Path) -> PathBuf {
 /// Temporary files being written now (removed by [`remove_temporaries`]).
 static IN_FLIGHT: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
+/// Held by every write of this module while it runs (a temporary being
+/// written, a staging commit renaming files), and by [`stop_writes`] for
+/// good: an interrupt waits for the write in progress and no write starts
+/// after it.
+static WRITING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Holds off an interrupt's clean-up ([`stop_writes`]) until the guard is
+/// dropped: for a caller that moves several files into place as one step.
+/// The writes of this module take it themselves; do not call them while
+/// holding it.
+pub fn begin_write() -> std::sync::MutexGuard<'static, ()> {
+    WRITING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// For a SIGINT/SIGTERM handler: waits until the write in progress (if
+/// any) is complete, removes the temporaries of every staged or unfinished
+/// output, and returns a guard that keeps any later write from starting.
+/// The handler cleans up what else it must and exits while holding it, so
+/// the writing thread never sees its temporary vanish (no "cannot write"
+/// error in place of the interrupt) and never leaves one behind.
+pub fn stop_writes() -> std::sync::MutexGuard<'static, ()> {
+    let guard = begin_write();
+    remove_temporaries();
+    guard
+}
+
 /// Removes the temporary files of writes in progress. A program calls it
-/// from its SIGINT/SIGTERM handler before exiting, so an interrupted write
+/// from its SIGINT/SIGTERM handler before exiting (through [`stop_writes`],
+/// which first waits for the write in progress), so an interrupted command
 /// leaves neither a partial output nor a temporary file.
 pub fn remove_temporaries() {
     let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
@@ -278,6 +312,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     check_replaceable(path)?;
     let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
+    let _writing = begin_write();
     remove_stale_temporaries(&dir, &name);
     let tmp = dir.join(temporary_name(&name, std::process::id()));
     IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
@@ -331,6 +366,7 @@ impl Staging {
         }
         check_replaceable(path)?;
         let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
+        let _writing = begin_write();
         remove_stale_temporaries(&dir, &name);
         let tmp = dir.join(temporary_name(&name, std::process::id()));
         IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
@@ -355,6 +391,7 @@ impl Staging {
 
     /// Renames every staged output into place, all or none (see the type).
     pub fn commit(mut self) -> Result<()> {
+        let _writing = begin_write();
         let staged = std::mem::take(&mut self.staged);
         // (final path, its backup if it existed)
         let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();

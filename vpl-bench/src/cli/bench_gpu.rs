@@ -56,11 +56,11 @@ fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, thre
     println!("{md}");
     if let Some(dir) = out {
         let out = super::OutDir::create("--out", dir)?;
-        vpl_core::image::write_atomic(&dir.join("gpu_bench.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+        vpl_core::image::write_atomic(&out.path().join("gpu_bench.md"), md.as_bytes()).map_err(|e| e.to_string())?;
         let json = serde_json::json!({ "adapter": adapter, "frames": frames, "threads": pool.current_num_threads(), "rows": rows });
         let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
-        vpl_core::image::write_atomic(&dir.join("gpu_bench.json"), text.as_bytes()).map_err(|e| e.to_string())?;
-        out.keep();
+        vpl_core::image::write_atomic(&out.path().join("gpu_bench.json"), text.as_bytes()).map_err(|e| e.to_string())?;
+        out.keep()?;
     }
     Ok(())
 }

@@ -79,6 +79,8 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
+    // Where the files go until the command succeeds (see OutDir).
+    let to = dir.path().to_path_buf();
     let settings = figures::FigureSettings {
         size: (w, h),
         reference_spp: spp,
@@ -93,20 +95,20 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         let mut figs = Vec::new();
         for sc in &scenes {
             eprintln!("vpl: figures: Figs. 8 and 9 on {sc}");
-            let (a, b) = pool.install(|| figures::fig8_9(&out, sc, 0, &settings)).map_err(|e| e.to_string())?;
+            let (a, b) = pool.install(|| figures::fig8_9(&to, sc, 0, &settings)).map_err(|e| e.to_string())?;
             figs.push((sc.clone(), a, b));
         }
-        figures::write_fig8(&out, &figs, &settings).map_err(|e| e.to_string())?;
+        figures::write_fig8(&to, &figs, &settings).map_err(|e| e.to_string())?;
     }
     if only.contains(&10) {
         let mut figs = Vec::new();
         for sc in &fig10_scenes {
             eprintln!("vpl: figures: Fig. 10 on {sc}");
-            figs.push((sc.clone(), pool.install(|| figures::fig10(&out, sc, &settings)).map_err(|e| e.to_string())?));
+            figs.push((sc.clone(), pool.install(|| figures::fig10(&to, sc, &settings)).map_err(|e| e.to_string())?));
         }
-        figures::write_fig10(&out, &figs, &settings).map_err(|e| e.to_string())?;
+        figures::write_fig10(&to, &figs, &settings).map_err(|e| e.to_string())?;
     }
-    dir.keep();
+    dir.keep()?;
     eprintln!("vpl: figures -> {}", out.display());
     Ok(())
 }

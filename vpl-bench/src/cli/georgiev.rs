@@ -63,17 +63,19 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     let dir = OutDir::create("--out", &out)?;
+    // Where the files go until the command succeeds (see OutDir).
+    let to = dir.path().to_path_buf();
     // One exposure for all three pictures: the reference's mean luminance at 0.18.
     let mean = r.reference.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>() / r.reference.data.len().max(1) as f64;
     let exposure = if mean > 0.0 { (0.18 / mean) as f32 } else { 1.0 };
     for (name, img) in [("reference", &r.reference), ("ir", &r.ir), ("rr", &r.rr)] {
         check_finite(img, &format!("the {name} image"))?;
-        img.write_exr(out.join(format!("corner_{name}.exr"))).map_err(|e| e.to_string())?;
-        img.write_png(out.join(format!("corner_{name}.png")), exposure).map_err(|e| e.to_string())?;
+        img.write_exr(to.join(format!("corner_{name}.exr"))).map_err(|e| e.to_string())?;
+        img.write_png(to.join(format!("corner_{name}.png")), exposure).map_err(|e| e.to_string())?;
     }
-    write_atomic(&out.join("georgiev.md"), r.markdown.as_bytes()).map_err(|e| e.to_string())?;
-    write_atomic(&out.join("georgiev.csv"), r.csv.as_bytes()).map_err(|e| e.to_string())?;
-    dir.keep();
+    write_atomic(&to.join("georgiev.md"), r.markdown.as_bytes()).map_err(|e| e.to_string())?;
+    write_atomic(&to.join("georgiev.csv"), r.csv.as_bytes()).map_err(|e| e.to_string())?;
+    dir.keep()?;
     print!("{}", r.markdown);
     Ok(())
 }

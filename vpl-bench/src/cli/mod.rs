@@ -438,12 +438,16 @@ where
 }
 
 /// [`run`] on the process's arguments; exits with its code. SIGINT and
-/// SIGTERM remove the temporary files of writes in progress and the outputs
-/// of the unfinished command, then exit with 130.
+/// SIGTERM wait for the write in progress, remove the staged and temporary
+/// files and the outputs of the unfinished command, then exit with 130.
 pub fn main(registry: &Registry) -> ! {
     // Without a handler (another one is installed) the default action still ends the process;
     // only the clean-up is lost, so the error is not fatal.
     let _ = ctrlc::set_handler(|| {
+        // On the writer's terms: wait for the file being written (or the
+        // staged outputs being renamed) to be complete, and start no other
+        // write; then remove what the command had not finished and exit.
+        let _writes = vpl_core::image::stop_writes();
         output::interrupted();
         eprintln!("vpl: interrupted; unfinished outputs removed");
         std::process::exit(130);

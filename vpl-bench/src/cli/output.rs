@@ -11,7 +11,6 @@
 //!   contents ([`OutDir`]); in a folder that existed, the files it added.
 
 use super::Res;
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use vpl_core::Image;
 use vpl_core::image::preview_path;
@@ -105,110 +104,192 @@ pub(super) fn interrupted() {
     }
 }
 
-/// The files a command wrote; unless [`Written::keep`] is called, dropping it
-/// (a failure returned with `?`, or a panic) removes them.
+/// The files a command writes, staged beside their names
+/// ([`vpl_core::image::Staging`]): [`Written::keep`] renames all of them
+/// into place at once; dropping it (a failure returned with `?`, or a
+/// panic) removes the staged files and leaves the earlier files as they
+/// were. A re-render whose `--stderr` cannot be written keeps the earlier
+/// `--out`.
 #[derive(Default)]
 pub(super) struct Written {
-    files: Vec<PathBuf>,
-    kept: bool,
+    staging: vpl_core::image::Staging,
 }
 
 impl Written {
-    /// Writes `img` to `out` (and its preview at `exposure`) after checking
+    /// Stages `img` for `out` (and its preview at `exposure`) after checking
     /// that every pixel is finite.
     pub fn image(&mut self, img: &Image, out: &ImageOut, exposure: f32, stage: &str) -> Res<()> {
         check_finite(img, stage)?;
         let exr = out.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        if exr {
-            img.write_exr(&out.path).map_err(|e| e.to_string())?;
-        } else {
-            img.write_png(&out.path, exposure).map_err(|e| e.to_string())?;
-        }
-        self.files.push(out.path.clone());
-        track(&out.path);
+        let bytes = if exr { img.encode_exr()? } else { img.encode_png(exposure)? };
+        self.staging.stage(&out.path, &bytes).map_err(|e| e.to_string())?;
         if let Some(p) = &out.preview {
-            img.write_png(p, exposure).map_err(|e| e.to_string())?;
-            self.files.push(p.clone());
-            track(p);
+            self.staging.stage(p, &img.encode_png(exposure)?).map_err(|e| e.to_string())?;
         }
         Ok(())
     }
 
-    /// The command succeeded: keep the files.
-    pub fn keep(mut self) {
-        self.kept = true;
+    /// The command succeeded: every staged file takes its place.
+    pub fn keep(self) -> Res<()> {
+        self.staging.commit().map_err(|e| e.to_string())
     }
 }
 
-impl Drop for Written {
-    fn drop(&mut self) {
-        for f in &self.files {
-            untrack(f);
-            if !self.kept {
-                let _ = std::fs::remove_file(f);
-            }
-        }
-    }
-}
-
-/// An output folder. Unless [`OutDir::keep`] is called, dropping it removes
-/// the folder when the command created it, and otherwise the files the
-/// command added to it.
+/// An output folder. A new folder is made and written directly; dropping
+/// it without [`OutDir::keep`] removes it. Into a folder that exists, the
+/// command writes a staging folder inside it (`.vpl-staging.PID`), and
+/// [`OutDir::keep`] moves what it holds into place, all or none (a file it
+/// replaces is restored if a later move fails); dropping it without
+/// `keep` removes the staging folder, so a failed or interrupted command
+/// leaves the folder as it was, its earlier frames included.
 pub(super) struct OutDir {
+    /// The folder the user named.
+    target: PathBuf,
+    /// Where the command writes: `target` when the command made it, else
+    /// the staging folder inside it.
     path: PathBuf,
     created: bool,
-    before: BTreeSet<PathBuf>,
     kept: bool,
 }
 
 impl OutDir {
-    /// Creates `path` (with its parents) unless it is a folder already.
+    /// Creates `path` (with its parents) unless it is a folder already, and
+    /// a staging folder inside it when it was.
     pub fn create(flag: &str, path: &Path) -> Res<OutDir> {
         if path.exists() && !path.is_dir() {
             return Err(format!("{flag} {} is not a directory", path.display()));
         }
         let created = !path.exists();
-        let before = listing(path);
         std::fs::create_dir_all(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
-        if created {
-            track(path);
+        let write_to = if created { path.to_path_buf() } else { path.join(format!(".vpl-staging.{}", std::process::id())) };
+        if !created {
+            let _ = std::fs::remove_dir_all(&write_to);
+            std::fs::create_dir(&write_to).map_err(|e| format!("cannot write into {}: {e}", path.display()))?;
         }
-        Ok(OutDir { path: path.into(), created, before, kept: false })
+        track(&write_to);
+        Ok(OutDir { target: path.into(), path: write_to, created, kept: false })
     }
 
-    /// The folder.
+    /// The folder the command writes into (the staging folder when the
+    /// named folder existed before).
     pub fn path(&self) -> &Path {
         &self.path
     }
 
-    /// The command succeeded: keep what it wrote.
-    pub fn keep(mut self) {
+    /// The command succeeded: what it wrote takes its place.
+    pub fn keep(mut self) -> Res<()> {
+        // An interrupt waits until every file has moved (or moved back).
+        let _writing = vpl_core::image::begin_write();
         self.kept = true;
+        untrack(&self.path);
+        if self.created {
+            return Ok(());
+        }
+        let result = commit_tree(&self.path, &self.target);
+        let _ = std::fs::remove_dir_all(&self.path);
+        result
     }
-}
-
-fn listing(dir: &Path) -> BTreeSet<PathBuf> {
-    std::fs::read_dir(dir).map(|r| r.flatten().map(|e| e.path()).collect()).unwrap_or_default()
 }
 
 impl Drop for OutDir {
     fn drop(&mut self) {
-        untrack(&self.path);
-        if self.kept {
-            return;
-        }
-        if self.created {
+        if !self.kept {
+            untrack(&self.path);
             let _ = std::fs::remove_dir_all(&self.path);
-        } else {
-            for p in listing(&self.path).difference(&self.before) {
-                if p.is_dir() {
-                    let _ = std::fs::remove_dir_all(p);
-                } else {
-                    let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+/// Moves every file under `from` to the same place under `to`, all or
+/// none: folders are made as needed, a file in the way is kept under a
+/// backup name until every move succeeded, and on a failure the moved
+/// files go back, the backups are restored and the made folders removed.
+fn commit_tree(from: &Path, to: &Path) -> Res<()> {
+    let mut moves = Vec::new();
+    collect_files(from, to, &mut moves).map_err(|e| format!("cannot read {}: {e}", from.display()))?;
+    let pid = std::process::id();
+    // (destination, its backup), and the folders made, in order.
+    let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
+    let mut made: Vec<PathBuf> = Vec::new();
+    let mut failure = None;
+    for (src, dst) in &moves {
+        let step = (|| -> Res<Option<PathBuf>> {
+            let parent = dst.parent().unwrap_or(to);
+            if !parent.is_dir() {
+                let mut missing = Vec::new();
+                let mut p = parent;
+                while !p.exists() {
+                    missing.push(p.to_path_buf());
+                    p = p.parent().unwrap_or(to);
                 }
+                std::fs::create_dir_all(parent).map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
+                made.extend(missing.into_iter().rev());
+            }
+            vpl_core::image::check_replaceable(dst).map_err(|e| e.to_string())?;
+            let backup = match std::fs::symlink_metadata(dst) {
+                Ok(_) => {
+                    let name = dst.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                    let b = dst.with_file_name(format!(".{name}.vpl-{pid}.bak"));
+                    std::fs::rename(dst, &b).map_err(|e| format!("cannot write {}: {e}", dst.display()))?;
+                    Some(b)
+                }
+                Err(_) => None,
+            };
+            if let Err(e) = std::fs::rename(src, dst) {
+                if let Some(b) = &backup {
+                    let _ = std::fs::rename(b, dst);
+                }
+                return Err(format!("cannot write {}: {e}", dst.display()));
+            }
+            Ok(backup)
+        })();
+        match step {
+            Ok(backup) => done.push((dst.clone(), backup)),
+            Err(e) => {
+                failure = Some(e);
+                break;
             }
         }
     }
+    match failure {
+        None => {
+            for (_, b) in done.into_iter().filter_map(|(d, b)| b.map(|b| (d, b))) {
+                let _ = std::fs::remove_file(b);
+            }
+            Ok(())
+        }
+        Some(e) => {
+            for (dst, backup) in done.into_iter().rev() {
+                match backup {
+                    Some(b) => {
+                        let _ = std::fs::rename(b, &dst);
+                    }
+                    None => {
+                        let _ = std::fs::remove_file(&dst);
+                    }
+                }
+            }
+            for d in made.into_iter().rev() {
+                let _ = std::fs::remove_dir(d);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// The files under `from` (recursively) with their places under `to`.
+fn collect_files(from: &Path, to: &Path, out: &mut Vec<(PathBuf, PathBuf)>) -> std::io::Result<()> {
+    let mut entries: Vec<_> = std::fs::read_dir(from)?.collect::<std::io::Result<_>>()?;
+    entries.sort_by_key(|e| e.file_name());
+    for e in entries {
+        let (src, dst) = (e.path(), to.join(e.file_name()));
+        if e.file_type()?.is_dir() {
+            collect_files(&src, &dst, out)?;
+        } else {
+            out.push((src, dst));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -236,25 +317,60 @@ mod tests {
             std::fs::write(d.path().join("x.csv"), "1").unwrap();
         }
         assert!(!root.join("new").exists());
+        let listing = |d: &Path| {
+            let mut v: Vec<String> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+            v.sort();
+            v
+        };
+        // Into an existing folder: an earlier file of the same name survives a failure.
         std::fs::create_dir_all(root.join("old")).unwrap();
         std::fs::write(root.join("old/mine.txt"), "keep").unwrap();
+        std::fs::write(root.join("old/x.csv"), "earlier").unwrap();
         {
             let d = OutDir::create("--out", &root.join("old")).unwrap();
             std::fs::write(d.path().join("x.csv"), "1").unwrap();
+            std::fs::create_dir(d.path().join("sub")).unwrap();
+            std::fs::write(d.path().join("sub/y.csv"), "2").unwrap();
         }
-        assert!(root.join("old/mine.txt").exists() && !root.join("old/x.csv").exists());
+        assert_eq!(listing(&root.join("old")), ["mine.txt", "x.csv"]);
+        assert_eq!(std::fs::read_to_string(root.join("old/x.csv")).unwrap(), "earlier");
+        // Kept, what it wrote takes its place, subfolders included.
+        let d = OutDir::create("--out", &root.join("old")).unwrap();
+        std::fs::write(d.path().join("x.csv"), "1").unwrap();
+        std::fs::create_dir(d.path().join("sub")).unwrap();
+        std::fs::write(d.path().join("sub/y.csv"), "2").unwrap();
+        d.keep().unwrap();
+        assert_eq!(listing(&root.join("old")), ["mine.txt", "sub", "x.csv"]);
+        assert_eq!(std::fs::read_to_string(root.join("old/x.csv")).unwrap(), "1");
+        // A move that fails (a folder took a file's place) moves nothing.
+        let d = OutDir::create("--out", &root.join("old")).unwrap();
+        std::fs::write(d.path().join("a.csv"), "new a").unwrap();
+        std::fs::write(d.path().join("x.csv"), "new x").unwrap();
+        std::fs::remove_file(root.join("old/x.csv")).unwrap();
+        std::fs::create_dir(root.join("old/x.csv")).unwrap();
+        assert!(d.keep().unwrap_err().contains("x.csv"));
+        assert_eq!(listing(&root.join("old")), ["mine.txt", "sub", "x.csv"]);
+        std::fs::remove_dir(root.join("old/x.csv")).unwrap();
+        // Images: nothing replaced until every output is staged.
         let out = ImageOut::new("--out", &root.join("old/r.exr"), true).unwrap();
         let mut img = Image::new(2, 1);
+        let mut w = Written::default();
+        w.image(&img, &out, 1.0, "test").unwrap();
+        w.keep().unwrap();
+        let earlier = std::fs::read(root.join("old/r.exr")).unwrap();
+        img.data[0].x = 5.0;
         {
             let mut w = Written::default();
             w.image(&img, &out, 1.0, "test").unwrap();
-            assert!(root.join("old/r.exr").exists() && root.join("old/r.png").exists());
+            // The --stderr cannot be staged: the new --out is not kept.
+            let stderr = ImageOut { path: root.join("missing/s.exr"), preview: None };
+            assert!(w.image(&img, &stderr, 1.0, "test").is_err());
         }
-        assert!(!root.join("old/r.exr").exists() && !root.join("old/r.png").exists());
+        assert_eq!(std::fs::read(root.join("old/r.exr")).unwrap(), earlier);
+        assert_eq!(listing(&root.join("old")), ["mine.txt", "r.exr", "r.png", "sub"]);
         img.data[1].y = f32::NAN;
         let e = Written::default().image(&img, &out, 1.0, "indirect shading").unwrap_err();
         assert!(e.starts_with("indirect shading produced 1 non-finite pixel(s) (first at 1, 0)"), "{e}");
-        assert!(!root.join("old/r.exr").exists());
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

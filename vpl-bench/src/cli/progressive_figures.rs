@@ -95,6 +95,8 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     }
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
+    // Where the files go until the command succeeds (see OutDir).
+    let to = dir.path().to_path_buf();
     let say = |m: &str| eprintln!("vpl: progressive figures: {m}");
     let fig7 = if only.contains(&7) {
         let s = pf::Fig7Settings {
@@ -108,7 +110,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
             clamp_budget: Some(vpls),
             seed,
         };
-        Some(pool.install(|| pf::fig7(&out, &s, &say)).map_err(|e| e.to_string())?)
+        Some(pool.install(|| pf::fig7(&to, &s, &say)).map_err(|e| e.to_string())?)
     } else {
         None
     };
@@ -124,14 +126,14 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
             seed,
         };
         for sc in &fig8_scenes {
-            rows.push(pool.install(|| pf::fig8_scene(&out, sc, &s, &say)).map_err(|e| e.to_string())?);
+            rows.push(pool.install(|| pf::fig8_scene(&to, sc, &s, &say)).map_err(|e| e.to_string())?);
         }
         let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
-        write_atomic(&out.join("fig8.json"), json.as_bytes()).map_err(|e| e.to_string())?;
+        write_atomic(&to.join("fig8.json"), json.as_bytes()).map_err(|e| e.to_string())?;
     }
     let md = format!("# Progressive point-light rendering (Dammertz et al. 2010)\n\n{}", pf::report(fig7.as_ref(), &rows, seconds, ""));
-    write_atomic(&out.join("progressive.md"), md.as_bytes()).map_err(|e| e.to_string())?;
-    dir.keep();
+    write_atomic(&to.join("progressive.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+    dir.keep()?;
     eprintln!("vpl: progressive figures -> {}", out.join("progressive.md").display());
     Ok(())
 }

@@ -164,7 +164,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if let Some(s) = &stderr {
         written.image(&r.stderr, s, 1.0, "the path tracer's standard error")?;
     }
-    written.keep();
+    written.keep()?;
     if !quiet {
         let m = r.image.mean();
         eprintln!(
@@ -224,7 +224,7 @@ fn render_vpl(
     }
     let mut written = Written::default();
     written.image(&r.image, out, exposure, "the VPL frame")?;
-    written.keep();
+    written.keep()?;
     if !quiet {
         let t = r.timings;
         let m = r.image.mean();
@@ -400,9 +400,9 @@ fn render_progressive(
     if let Some(s) = stderr {
         written.image(&r.stderr(), s, 1.0, "the progressive renderer's standard error")?;
     }
-    written.keep();
+    written.keep()?;
     if let Some(d) = snapshots {
-        d.keep();
+        d.keep()?;
     }
     if !quiet {
         let m = img.mean();

@@ -105,7 +105,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
                 size.map(|s| (s.0, s.1)),
                 &mut p,
                 &tracked,
-                Some((&out, exposure)),
+                Some((dir.path(), exposure)),
                 &mut |f, _| {
                     bar.set_message(format!("{:.0} ms, {} VPLs moved", f.timings.total_ms, f.moved));
                     bar.inc(1);
@@ -114,7 +114,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         })
         .map_err(crate::pipeline::backend_line)?;
     bar.finish_and_clear();
-    dir.keep();
+    dir.keep()?;
     if !quiet {
         let mean_ms = done.iter().map(|f| f.timings.total_ms).sum::<f64>() / done.len() as f64;
         let moved = done.iter().skip(1).map(|f| f.moved).max().unwrap_or(0);

@@ -54,8 +54,8 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         }
         rows.push(row);
     }
-    crate::table2::write(&out, &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
-    dir.keep();
+    crate::table2::write(dir.path(), &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
+    dir.keep()?;
     eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
     Ok(())
 }

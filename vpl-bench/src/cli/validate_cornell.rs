@@ -37,14 +37,16 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     let dir = OutDir::create("--out", &out)?;
+    // Where the files go until the command succeeds (see OutDir).
+    let to = dir.path().to_path_buf();
     for v in &vs {
-        crate::validation::write_difference(v, &out).map_err(|e| e.to_string())?;
-        v.ours.0.write_png(out.join(format!("cornell_{}_ours.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
-        v.theirs.0.write_png(out.join(format!("cornell_{}_mitsuba.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
+        crate::validation::write_difference(v, &to).map_err(|e| e.to_string())?;
+        v.ours.0.write_png(to.join(format!("cornell_{}_ours.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
+        v.theirs.0.write_png(to.join(format!("cornell_{}_mitsuba.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
     }
     let md = crate::validation::report_markdown(&vs, spp);
-    write_atomic(&out.join("cornell_validation.md"), md.as_bytes()).map_err(|e| e.to_string())?;
-    dir.keep();
+    write_atomic(&to.join("cornell_validation.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+    dir.keep()?;
     print!("{md}");
     Ok(())
 }

@@ -39,11 +39,34 @@ pub enum Target {
     /// A mutated PLY mesh (binary and ASCII) beside the Mitsuba scene that
     /// uses it, rendered.
     Ply,
+    /// A mutated glTF (JSON) with its buffers and a texture, named by a
+    /// scene TOML that lights it, rendered.
+    Gltf,
+    /// A mutated binary glTF (GLB: JSON and BIN chunks, an emissive
+    /// triangle pair and a punctual light), rendered.
+    Glb,
+    /// A mutated scene TOML with a `[sequence]`, rendered as a sequence of
+    /// three frames into a folder (`vpl sequence`).
+    Sequence,
+    /// A finished tiny Table 1 run whose `spec.json` or one unit file is
+    /// mutated, merged (`vpl merge`).
+    Table1,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 6] = [Target::Obj, Target::Mtl, Target::Toml, Target::Exr, Target::Mitsuba, Target::Ply];
+    pub const ALL: [Target; 10] = [
+        Target::Obj,
+        Target::Mtl,
+        Target::Toml,
+        Target::Exr,
+        Target::Mitsuba,
+        Target::Ply,
+        Target::Gltf,
+        Target::Glb,
+        Target::Sequence,
+        Target::Table1,
+    ];
 
     /// Its name (the folder of its regressions).
     pub fn name(self) -> &'static str {
@@ -54,6 +77,10 @@ impl Target {
             Target::Exr => "exr",
             Target::Mitsuba => "mitsuba",
             Target::Ply => "ply",
+            Target::Gltf => "gltf",
+            Target::Glb => "glb",
+            Target::Sequence => "sequence",
+            Target::Table1 => "table1",
         }
     }
 
@@ -149,6 +176,13 @@ const MITSUBA_BSDFS: &str = r#"<scene version="3.0.0">
 </scene>
 "#;
 
+/// An OBJ scene with lights, a material override and a sequence.
+const OBJ_SCENE: &str = "[geometry]\nobj = \"cbox.obj\"\nup = \"y\"\nscale = 1.0\n\n[camera]\norigin = [0, 0, 3.9]\ntarget = [0, 0, 0]\nfov = 39.3\n\
+                             resolution = [8, 6]\n\n[[lights]]\ntype = \"point\"\nposition = [0, 0.5, 0]\nintensity = [1, 1, 1]\n\n[[lights]]\n\
+                             type = \"spot\"\nposition = [0, 0.9, 0]\ndirection = [0, -1, 0]\nintensity = [2, 2, 2]\nangle = 40\n\n[[materials]]\n\
+                             name = \"red\"\nalbedo = [0.6, 0.1, 0.1]\nkappa = 0.5\nspecular = [0.2, 0.2, 0.2]\n\n[sequence]\nfps = 2\nduration = 1\n\
+                             camera = [ { t = 0, origin = [0, 0, 3.9], target = [0, 0, 0] } ]\nlights = [ { light = 0, t = 1, position = [0.2, 0.5, 0] } ]\n";
+
 /// The seeds of `target`.
 pub fn seeds(target: Target) -> Vec<Seed> {
     let cbox = ("cbox.obj".to_string(), data("cornell-box/cbox.obj"));
@@ -163,12 +197,7 @@ pub fn seeds(target: Target) -> Vec<Seed> {
                 .iter()
                 .map(|b| Seed { files: vec![("s.toml".into(), SceneSetup::builtin(b).expect("built-in").to_toml().into_bytes())] })
                 .collect();
-            let obj_scene = "[geometry]\nobj = \"cbox.obj\"\nup = \"y\"\nscale = 1.0\n\n[camera]\norigin = [0, 0, 3.9]\ntarget = [0, 0, 0]\nfov = 39.3\n\
-                             resolution = [8, 6]\n\n[[lights]]\ntype = \"point\"\nposition = [0, 0.5, 0]\nintensity = [1, 1, 1]\n\n[[lights]]\n\
-                             type = \"spot\"\nposition = [0, 0.9, 0]\ndirection = [0, -1, 0]\nintensity = [2, 2, 2]\nangle = 40\n\n[[materials]]\n\
-                             name = \"leftWall\"\nalbedo = [0.6, 0.1, 0.1]\nkappa = 0.5\nspecular = [0.2, 0.2, 0.2]\n\n[sequence]\nfps = 2\nduration = 1\n\
-                             camera = [ { t = 0, origin = [0, 0, 3.9], target = [0, 0, 0] } ]\nlights = [ { light = 0, t = 1, position = [0.2, 0.5, 0] } ]\n";
-            v.push(Seed { files: vec![("s.toml".into(), obj_scene.as_bytes().to_vec()), cbox, cbox_mtl] });
+            v.push(Seed { files: vec![("s.toml".into(), OBJ_SCENE.as_bytes().to_vec()), cbox, cbox_mtl] });
             v
         }
         Target::Exr => {
@@ -194,7 +223,154 @@ pub fn seeds(target: Target) -> Vec<Seed> {
                 .map(|b| Seed { files: vec![("m.ply".into(), ply_tetrahedron(*b)), scene.clone(), bsdfs.clone()] })
                 .collect()
         }
+        Target::Gltf => {
+            let gltf = |rel: &str| gltf_data(rel);
+            let lit = |model: &str| {
+                format!(
+                    "[geometry]\ngltf = \"{model}\"\n[camera]\norigin = [1.5, 1.2, 2.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 45.0\n\
+                     resolution = [8, 6]\n[[lights]]\ntype = \"point\"\nposition = [0.8, 1.5, 0.6]\nintensity = [2.0, 2.0, 2.0]\n"
+                )
+                .into_bytes()
+            };
+            vec![
+                Seed {
+                    files: vec![
+                        ("box.gltf".into(), gltf("Box/Box.gltf")),
+                        ("s.toml".into(), lit("box.gltf")),
+                        ("Box0.bin".into(), gltf("Box/Box0.bin")),
+                    ],
+                },
+                Seed {
+                    files: vec![
+                        ("tex.gltf".into(), gltf("BoxTextured/BoxTextured-matching.gltf")),
+                        ("s.toml".into(), lit("tex.gltf")),
+                        ("BoxTextured0.bin".into(), gltf("BoxTextured/BoxTextured0.bin")),
+                        ("CesiumLogoFlat.png".into(), gltf("BoxTextured/CesiumLogoFlat.png")),
+                    ],
+                },
+            ]
+        }
+        Target::Glb => vec![Seed { files: vec![("s.glb".into(), glb_scene())] }],
+        Target::Sequence => {
+            let cbox = ("cbox.obj".to_string(), data("cornell-box/cbox.obj"));
+            let cbox_mtl = ("cbox.mtl".to_string(), data("cornell-box/cbox.mtl"));
+            let mut v: Vec<Seed> = ["courtyard", "corner"]
+                .iter()
+                .map(|b| Seed { files: vec![("s.toml".into(), SceneSetup::builtin(b).expect("built-in").to_toml().into_bytes())] })
+                .collect();
+            v.push(Seed { files: vec![("s.toml".into(), OBJ_SCENE.as_bytes().to_vec()), cbox, cbox_mtl] });
+            v
+        }
+        Target::Table1 => table1_seeds(),
     }
+}
+
+/// A glTF sample of `vpl-core`'s test data.
+fn gltf_data(rel: &str) -> Vec<u8> {
+    let p = crate::data_dir().join("../../vpl-core/tests/data/gltf").join(rel);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("fuzz seed {}: {e}", p.display()))
+}
+
+/// A small GLB: two triangles (a floor and an emissive quad's half) with
+/// normals and u16 indices in the BIN chunk, a point light, a camera.
+fn glb_scene() -> Vec<u8> {
+    let mut bin = Vec::new();
+    let positions = [[-1.0f32, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0], [-0.5, 1.0, -0.5], [0.5, 1.0, -0.5], [0.0, 1.0, 0.5]];
+    for p in positions {
+        p.iter().for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    }
+    for n in [[0.0f32, 1.0, 0.0]; 3].into_iter().chain([[0.0f32, -1.0, 0.0]; 3]) {
+        n.iter().for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    }
+    for i in [0u16, 2, 1, 3, 4, 5] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_lights_punctual"],
+"extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":2.0,"color":[1,0.9,0.8]}}]}}}},
+"buffers":[{{"byteLength":{len}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":72}},{{"buffer":0,"byteOffset":72,"byteLength":72}},{{"buffer":0,"byteOffset":144,"byteLength":12}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":6,"type":"VEC3","min":[-1,0,-1],"max":[1,1,1]}},
+{{"bufferView":1,"componentType":5126,"count":6,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[0.8,0.8,0.8,1]}},"emissiveFactor":[0.5,0.5,0.5]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2,"material":0}}]}}],
+"cameras":[{{"type":"perspective","perspective":{{"yfov":0.9,"znear":0.01,"aspectRatio":1.333}}}}],
+"nodes":[{{"mesh":0}},{{"extensions":{{"KHR_lights_punctual":{{"light":0}}}},"translation":[0,0.6,0]}},{{"camera":0,"translation":[0,0.5,3]}}],
+"scenes":[{{"nodes":[0,1,2]}}],"scene":0}}"#,
+        len = bin.len()
+    );
+    let mut json = json.into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&bin);
+    glb
+}
+
+/// The tiny Table 1 run the `table1` target merges: maze, two frames, IR
+/// and SMC, one seed. Made once a process (a few seconds).
+fn table1_run() -> &'static Vec<(String, Vec<u8>)> {
+    static RUN: std::sync::OnceLock<Vec<(String, Vec<u8>)>> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        use vpl_bench::table1::{self, RowRun, Shard, Table1Spec};
+        let spec = Table1Spec {
+            profile: "fuzz".into(),
+            rows: vec![RowRun { id: "maze".into(), start: 300, end: 302 }],
+            methods: vec!["ir".into(), "smc".into()],
+            size: (32, 24),
+            truth_spp: 16,
+            max_depth: 4,
+            shadow_map_res: 16,
+            seed: 1,
+            seeds: 1,
+            backend: vpl_bench::pipeline::BackendKind::Cpu,
+        };
+        let dir = std::env::temp_dir().join(format!("vpl-fuzz-table1-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        table1::run(&vpl_sampling::Registry::builtin(), &spec, &dir, Shard::ALL, &mut |_| {}).expect("the tiny Table 1 run");
+        let mut files = Vec::new();
+        collect(&dir, &dir, &mut files);
+        let _ = std::fs::remove_dir_all(&dir);
+        files.sort();
+        files
+    })
+}
+
+/// Every file under `dir`, named relative to `root`.
+fn collect(root: &Path, dir: &Path, out: &mut Vec<(String, Vec<u8>)>) {
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            collect(root, &p, out);
+        } else if let (Ok(rel), Ok(bytes)) = (p.strip_prefix(root), std::fs::read(&p)) {
+            out.push((rel.to_string_lossy().into_owned(), bytes));
+        }
+    }
+}
+
+/// One seed per file of the tiny run: that file mutated, the others beside it.
+fn table1_seeds() -> Vec<Seed> {
+    let files = table1_run();
+    (0..files.len())
+        .map(|k| {
+            let mut f = vec![files[k].clone()];
+            f.extend(files.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, x)| x.clone()));
+            Seed { files: f }
+        })
+        .collect()
 }
 
 /// Tokens the mutator writes over numbers and names.
@@ -343,8 +519,95 @@ fn lines(target: Target) -> &'static [&'static str] {
             "<![CDATA[x]]>",
             "</scene>",
         ],
-        Target::Ply => &["element face 99999999", "property list uchar uint vertex_indices", "format binary_big_endian 1.0", "end_header"],
-        Target::Exr => &[],
+        Target::Ply => &[
+            "element face 99999999",
+            "element vertex 4000000000",
+            "element junk 4000000000",
+            "property list uchar uint vertex_indices",
+            "property list uint uint vertex_indices",
+            "format binary_big_endian 1.0",
+            "end_header",
+        ],
+        Target::Gltf => &[
+            "\"uri\": \"../secret.bin\",",
+            "\"uri\": \"/dev/zero\",",
+            "\"uri\": \"/etc/passwd\",",
+            "\"uri\": \"%ff%fe.bin\",",
+            "\"uri\": \"file:///etc/hostname\",",
+            "\"uri\": \"https://example.com/x.bin\",",
+            "\"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA\",",
+            "\"uri\": \"data:application/octet-stream;base64,@@@\",",
+            "\"byteStride\": 4,",
+            "\"byteStride\": 0,",
+            "\"byteOffset\": 4294967295,",
+            "\"byteLength\": 18446744073709551615,",
+            "\"componentType\": 5120,",
+            "\"componentType\": 5121,",
+            "\"componentType\": 5122,",
+            "\"componentType\": 5126,",
+            "\"type\": \"SCALAR\",",
+            "\"type\": \"MAT4\",",
+            "\"normalized\": true,",
+            "\"count\": 0,",
+            "\"count\": 5000000000,",
+            "\"sparse\": {\"count\": 1, \"indices\": {\"bufferView\": 0, \"componentType\": 5123}, \"values\": {\"bufferView\": 0}},",
+            "\"sparse\": {\"count\": 4000000000, \"indices\": {\"bufferView\": 0, \"componentType\": 5125}, \"values\": {\"bufferView\": 0}},",
+            "\"children\": [0, 0],",
+            "\"children\": [1, 1],",
+            "\"mode\": 0,",
+            "\"mode\": 5,",
+            "\"mode\": 6,",
+            "\"bufferView\": 99,",
+            "\"mimeType\": \"image/png\",",
+            "\"mimeType\": \"image/ktx2\",",
+            "\"extensionsRequired\": [\"KHR_draco_mesh_compression\"],",
+            "\"extensions\": {\"KHR_materials_emissive_strength\": {\"emissiveStrength\": 1e30}},",
+            "\"extensions\": {\"KHR_node_visibility\": {\"visible\": false}},",
+            "\"scale\": [1e30, 1e30, 1e30],",
+            "\"matrix\": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0],",
+            "\"rotation\": [0, 0, 0, 0],",
+            "\"emissiveFactor\": [1e38, 1, 1],",
+            "\"baseColorFactor\": [2, 2, 2, 1],",
+            "\"min\": [0, 0, 0], \"max\": [0, 0, 0],",
+        ],
+        Target::Sequence => &[
+            "fps = inf",
+            "fps = 1e-30",
+            "fps = 1e9",
+            "duration = 1e30",
+            "duration = 0",
+            "duration = -1",
+            "camera = [ { t = nan, origin = [0, 0, 3.9], target = [0, 0, 0] } ]",
+            "camera = [ { t = 0, origin = [0, 0, 3.9], target = [0, 0, 3.9] } ]",
+            "camera = [ { t = 1e30, origin = [1e30, 0, 0], target = [0, 0, 0] } ]",
+            "lights = [ { light = 99, t = 0, position = [0, 0, 0] } ]",
+            "lights = [ { light = 0, t = 0, direction = [0, 0, 0] } ]",
+            "lights = [ { light = 0, t = 0.5, position = [0, 1e30, 0] } ]",
+            "[sequence]\nfps = 30\nduration = 1e6",
+            "[sequence]",
+            "lens_radius = 1e20",
+        ],
+        Target::Table1 => &[
+            "\"seeds\": 1000,",
+            "\"seeds\": 0,",
+            "\"methods\": [\"ir\", \"ir\"],",
+            "\"methods\": [],",
+            "\"rows\": [],",
+            "\"size\": [0, 0],",
+            "\"size\": [100000, 100000],",
+            "\"truth_spp\": 0,",
+            "\"frames\": [],",
+            "\"seconds\": 1e309,",
+            "\"samples\": 18446744073709551616,",
+            "1e39,",
+            "-1e39,",
+            "[1e39, 0, 0],",
+            "\"row\": \"../../etc\",",
+            "\"row\": \"sponza\",",
+            "\"method\": \"nope\",",
+            "\"hash\": \"0\",",
+        ],
+        Target::Exr | Target::Glb => &[],
     }
 }
 
@@ -377,7 +640,7 @@ pub fn mutate(input: &[u8], target: Target, rng: &mut RngStream) -> Vec<u8> {
     let mut b = input.to_vec();
     let edits = 1 + rng.below(4);
     for _ in 0..edits {
-        let textual = target != Target::Exr;
+        let textual = !matches!(target, Target::Exr | Target::Glb);
         match rng.below(if textual { 10 } else { 6 }) {
             // Flip a bit.
             0 if !b.is_empty() => {
@@ -534,7 +797,11 @@ pub fn run_one(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u
     });
     if let Ok(entries) = std::fs::read_dir(dir) {
         for e in entries.flatten() {
-            let _ = std::fs::remove_file(e.path());
+            if e.path().is_dir() {
+                let _ = std::fs::remove_dir_all(e.path());
+            } else {
+                let _ = std::fs::remove_file(e.path());
+            }
         }
     }
     outcome
@@ -550,16 +817,25 @@ fn execute(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) 
     }
     for (i, (name, bytes)) in seed.files.iter().enumerate() {
         let bytes = if i == 0 { input } else { bytes };
-        if let Err(e) = std::fs::write(dir.join(name), bytes) {
+        let path = dir.join(name);
+        if let Some(parent) = path.parent() {
+            let _ = std::fs::create_dir_all(parent);
+        }
+        if let Err(e) = std::fs::write(&path, bytes) {
             return Outcome::Finding(format!("cannot write the input: {e}"));
         }
     }
+    let before: Vec<PathBuf> = listing(dir);
+    match target {
+        Target::Sequence => return execute_sequence(dir, variant, &before),
+        Target::Table1 => return execute_merge(dir, &before),
+        _ => {}
+    }
     let scene = dir.join(match target {
-        Target::Mtl | Target::Ply => &seed.files[1].0,
+        Target::Mtl | Target::Ply | Target::Gltf => &seed.files[1].0,
         _ => &seed.files[0].0,
     });
     let out = dir.join("out.exr");
-    let before: Vec<PathBuf> = listing(dir);
     let code = vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), command(&scene, &out, variant));
     match code {
         0 => match Image::read_exr(&out) {
@@ -573,10 +849,76 @@ fn execute(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) 
             Ok(_) => Outcome::Finding("exit 0 with a non-finite pixel".into()),
             Err(e) => Outcome::Finding(format!("exit 0 but the output does not read back: {e}")),
         },
-        2 => {
-            let left: Vec<PathBuf> = listing(dir).into_iter().filter(|p| !before.contains(p)).collect();
-            if left.is_empty() { Outcome::Refused("exit 2".into()) } else { Outcome::Finding(format!("exit 2 left {left:?} behind")) }
+        2 => refused_cleanly(dir, &before),
+        c => Outcome::Finding(format!("exit code {c}")),
+    }
+}
+
+/// Exit 2: nothing may be left beside the inputs.
+fn refused_cleanly(dir: &Path, before: &[PathBuf]) -> Outcome {
+    let left: Vec<PathBuf> = listing(dir).into_iter().filter(|p| !before.contains(p)).collect();
+    if left.is_empty() { Outcome::Refused("exit 2".into()) } else { Outcome::Finding(format!("exit 2 left {left:?} behind")) }
+}
+
+/// `vpl sequence` of three frames (IR or SMC) into `dir/seq`: on success
+/// every frame's EXR is finite and the CSV is there.
+fn execute_sequence(dir: &Path, variant: u64, before: &[PathBuf]) -> Outcome {
+    let out = dir.join("seq");
+    let sampler = if variant.is_multiple_of(2) { "ir" } else { "smc" };
+    let args: Vec<String> = [
+        "vpl",
+        "sequence",
+        "--scene",
+        "s.toml",
+        "--sampler",
+        sampler,
+        "--vpls",
+        "16",
+        "--size",
+        "8x6",
+        "--frames",
+        "0..2",
+        "--threads",
+        "1",
+        "--quiet",
+        "--out",
+    ]
+    .iter()
+    .map(|a| a.to_string())
+    .chain([out.display().to_string()])
+    .map(|a| if a == "s.toml" { dir.join("s.toml").display().to_string() } else { a })
+    .collect();
+    match vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), args) {
+        0 => {
+            let exrs: Vec<PathBuf> = listing(&out).into_iter().filter(|p| p.extension().is_some_and(|e| e == "exr")).collect();
+            if exrs.len() != 2 {
+                return Outcome::Finding(format!("exit 0 with {} frames of 2", exrs.len()));
+            }
+            for f in exrs {
+                match Image::read_exr(&f) {
+                    Ok(img) if img.data.iter().all(|p| p.is_finite()) => {}
+                    Ok(_) => return Outcome::Finding(format!("exit 0 with a non-finite pixel in {}", f.display())),
+                    Err(e) => return Outcome::Finding(format!("exit 0 but {} does not read back: {e}", f.display())),
+                }
+            }
+            Outcome::Accepted
         }
+        2 => refused_cleanly(dir, before),
+        c => Outcome::Finding(format!("exit code {c}")),
+    }
+}
+
+/// `vpl merge` of the run in `dir`: on success the table is there and
+/// prints no infinity or NaN; on a refusal no output is left.
+fn execute_merge(dir: &Path, before: &[PathBuf]) -> Outcome {
+    let args = vec!["vpl".to_string(), "merge".into(), dir.display().to_string()];
+    match vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), args) {
+        0 => match std::fs::read_to_string(dir.join("table1.md")) {
+            Ok(md) if md.contains("inf") || md.contains("NaN") => Outcome::Finding("exit 0 with inf or NaN in table1.md".into()),
+            Ok(_) => Outcome::Accepted,
+            Err(e) => Outcome::Finding(format!("exit 0 without table1.md: {e}")),
+        },
+        2 => refused_cleanly(dir, before),
         c => Outcome::Finding(format!("exit code {c}")),
     }
 }

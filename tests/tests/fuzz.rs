@@ -43,3 +43,19 @@ fn fresh_mutations_keep_the_promises() {
         assert_eq!(report.executions, execs);
     }
 }
+
+/// Each seed, unmutated, renders (or merges) with every renderer: a seed
+/// that is refused would make its mutations test the refusal only.
+#[test]
+fn unmutated_seeds_are_accepted() {
+    fuzz::quiet_panics();
+    for t in Target::ALL {
+        let dir = scratch(&format!("seed-{}", t.name()));
+        for (k, seed) in fuzz::seeds(t).iter().enumerate() {
+            for variant in 0..4 {
+                let outcome = fuzz::run_one(t, seed, &seed.files[0].1, &dir, variant);
+                assert_eq!(outcome, Outcome::Accepted, "{} seed {k} (renderer {variant})", t.name());
+            }
+        }
+    }
+}

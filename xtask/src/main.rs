@@ -20,7 +20,7 @@
 //!   `office`, and the SMC sampler's steps (the SMC paper's Table 2) on `office` and `maze`.
 //! - `cargo xtask bench-gpu`: milliseconds per GPU kernel and per indirect frame at 1920×1080,
 //!   2048 SMC VPLs, `office` and `atrium`, and the adapter they ran on.
-//! - `cargo xtask fuzz [--seconds N] [--target obj|mtl|toml|exr|mitsuba|ply|all] [--seed S]`: the loader
+//! - `cargo xtask fuzz [--seconds N] [--target obj|mtl|toml|exr|mitsuba|ply|gltf|glb|sequence|table1|all] [--seed S]`: the loader
 //!   fuzz targets (`tests/src/fuzz.rs`) for N seconds (default 600) in the `fuzz` profile (release
 //!   speed with debug assertions and overflow checks); prints the
 //!   executions and findings, writes findings to `target/fuzz-findings/`.

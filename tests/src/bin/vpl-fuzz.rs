@@ -2,7 +2,7 @@
 //! executions and what they found (`cargo xtask fuzz` runs it).
 //!
 //! ```text
-//! vpl-fuzz [--target obj|mtl|toml|exr|mitsuba|ply|all] [--seconds N] [--executions N] [--seed S] [--first I]
+//! vpl-fuzz [--target obj|mtl|toml|exr|mitsuba|ply|gltf|glb|sequence|table1|all] [--seconds N] [--executions N] [--seed S] [--first I]
 //!          [--findings DIR] [--inputs DIR]
 //! ```
 //!

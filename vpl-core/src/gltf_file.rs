@@ -105,7 +105,12 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
 pub fn load_gltf_in(path: &Path, camera: Option<&str>, sandbox: &Sandbox) -> Result<GltfData> {
     let err = |reason: String| CoreError::Gltf { path: path.into(), reason };
     let bytes = read_bytes(path, MAX_MESH_BYTES)?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| err(e.to_string()))?;
+    check_glb_header(&bytes).map_err(err)?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
+    // The `gltf` validation indexes a primitive's POSITION accessor without
+    // a bounds check: looked at first, then the whole document validated.
+    check_position_indices(document.as_json()).map_err(err)?;
+    let document = gltf::Document::from_json(document.into_json()).map_err(|e| err(e.to_string()))?;
     drop(bytes);
     for required in document.extensions_required() {
         if !SUPPORTED_EXTENSIONS.contains(&required) {
@@ -149,6 +154,39 @@ pub fn load_gltf_in(path: &Path, camera: Option<&str>, sandbox: &Sandbox) -> Res
         None => state.cameras.first().map(|(_, c)| c.clone()),
     };
     Ok(reader.data)
+}
+
+/// Refuses a GLB whose header gives a total length under the header's own
+/// 12 bytes: the `gltf` reader subtracts 12 from it unchecked (an overflow
+/// panic where overflow checks are on).
+fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
+        let length = u32::from_le_bytes([len[0], len[1], len[2], len[3]]);
+        if length < 12 {
+            return Err(format!("its GLB header gives a length of {length} bytes, less than the header itself"));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a primitive whose POSITION names an accessor that does not exist
+/// (before `gltf`'s validation, which would index past the accessors).
+fn check_position_indices(root: &gltf::json::Root) -> std::result::Result<(), String> {
+    use gltf::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) {
+                if i.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: POSITION names accessor {}, but there are {}",
+                        i.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a node hierarchy that is no set of disjoint trees (glTF 2.0,
@@ -518,7 +556,7 @@ impl Reader<'_> {
     /// decoded within the memory limit when first used.
     fn texture_average(
         &mut self,
-        _doc: &gltf::Document,
+        doc: &gltf::Document,
         tex: &gltf::Texture,
         cutoff: Option<f32>,
         blend: bool,
@@ -530,6 +568,19 @@ impl Reader<'_> {
             Some(m) => *m,
             None => {
                 let what = format!("material {material}: image {}", image.index());
+                // `Image::source` unwraps what glTF 2.0 §5.17 requires
+                // (a mimeType beside a bufferView; a uri or a bufferView)
+                // and validation does not check: checked here first.
+                match doc.as_json().images.get(image.index()) {
+                    Some(j) if j.buffer_view.is_some() && j.mime_type.is_none() => {
+                        return Err(self.err(format!("{what}: a bufferView image needs a mimeType")));
+                    }
+                    Some(j) if j.buffer_view.is_none() && j.uri.is_none() => {
+                        return Err(self.err(format!("{what}: it has neither a uri nor a bufferView")));
+                    }
+                    Some(_) => {}
+                    None => return Err(self.err(format!("{what}: no such image"))),
+                }
                 let (bytes, mime) = match image.source() {
                     gltf::image::Source::View { view, mime_type } => {
                         (self.view_bytes(&view).map_err(|r| self.err(format!("{what}: {r}")))?.to_vec(), Some(mime_type))

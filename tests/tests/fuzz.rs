@@ -1,6 +1,7 @@
 //! The loader fuzz targets, bounded: every kept regression input is replayed
 //! and must end in a finite image or a one-line refusal, then
-//! `VPL_FUZZ_EXECS` fresh mutations per target (default 40) must too.
+//! `VPL_FUZZ_EXECS` fresh mutations per target (default 40, one test a
+//! target) must too.
 //! `cargo xtask fuzz --seconds N` runs them for longer.
 
 use vpl_tests::fuzz::{self, Outcome, Target};
@@ -32,17 +33,46 @@ fn kept_regressions_stay_fixed() {
     assert!(replayed > 0, "tests/data/fuzz-regressions holds no inputs");
 }
 
-#[test]
-fn fresh_mutations_keep_the_promises() {
+/// `VPL_FUZZ_EXECS` fresh mutations of `t` (default 40) keep the promises.
+fn fresh_mutations_keep_the_promises(t: Target) {
     fuzz::quiet_panics();
     let execs: u64 = std::env::var("VPL_FUZZ_EXECS").ok().and_then(|v| v.parse().ok()).unwrap_or(40);
-    for t in Target::ALL {
-        let report = fuzz::run(t, 7, 0, &scratch(t.name()), |done| done >= execs);
-        let f: Vec<String> = report.findings.iter().map(|f| format!("execution {}: {}", f.execution, f.what)).collect();
-        assert!(f.is_empty(), "{}: {}", t.name(), f.join("; "));
-        assert_eq!(report.executions, execs);
-    }
+    let report = fuzz::run(t, 7, 0, &scratch(t.name()), |done| done >= execs);
+    let f: Vec<String> = report.findings.iter().map(|f| format!("execution {}: {}", f.execution, f.what)).collect();
+    assert!(f.is_empty(), "{}: {}", t.name(), f.join("; "));
+    assert_eq!(report.executions, execs);
 }
+
+/// One test a target, so that a test runner spreads them over its threads.
+macro_rules! fresh_mutations {
+    ($($name:ident: $target:ident),* $(,)?) => {
+        $(
+            #[test]
+            fn $name() {
+                fresh_mutations_keep_the_promises(Target::$target);
+            }
+        )*
+        /// Every target has its test.
+        #[test]
+        fn every_target_has_a_fresh_mutation_test() {
+            let named = [$(Target::$target),*];
+            assert!(Target::ALL.iter().all(|t| named.contains(t)), "a target without a test");
+        }
+    };
+}
+
+fresh_mutations!(
+    fresh_obj: Obj,
+    fresh_mtl: Mtl,
+    fresh_toml: Toml,
+    fresh_exr: Exr,
+    fresh_mitsuba: Mitsuba,
+    fresh_ply: Ply,
+    fresh_gltf: Gltf,
+    fresh_glb: Glb,
+    fresh_sequence: Sequence,
+    fresh_table1: Table1,
+);
 
 /// Each seed, unmutated, renders (or merges) with every renderer: a seed
 /// that is refused would make its mutations test the refusal only.

@@ -256,6 +256,31 @@ fn mitsuba_includes_and_attributes_are_bounded_and_stay_in_the_folder() {
     }
 }
 
+/// A mesh file named by many shapes is read and expanded for each: the
+/// files of all shapes together are weighed against the memory limit.
+#[test]
+fn mitsuba_meshes_named_many_times_are_weighed_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut obj = String::new();
+    for i in 0..2000 {
+        obj.push_str(&format!("v {i} 0 0\nv {i} 1 0\nv {i} 0 1\n"));
+    }
+    obj.push_str("f 1 2 3\n");
+    std::fs::write(dir.path().join("m.obj"), &obj).unwrap();
+    let shape = "<shape type=\"obj\"><string name=\"filename\" value=\"m.obj\"/></shape>";
+    let light = "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"1\" z=\"0\"/><rgb name=\"intensity\" value=\"1\"/></emitter>";
+    let scene = |n: usize| format!("<scene version=\"3.0.0\">{light}{}</scene>", shape.repeat(n));
+    let p = dir.path().join("s.xml");
+    let limited = |n: usize| {
+        std::fs::write(&p, scene(n)).unwrap();
+        let options = LoadOptions { memory_limit: Some(20 * obj.len() as u64), ..Default::default() };
+        SceneSetup::load_with(p.to_str().unwrap(), &options)
+    };
+    assert!(limited(20).is_ok());
+    let e = limited(21).unwrap_err().to_string();
+    assert!(e.contains("s.xml:1:") && e.contains("mesh files come to more than"), "{e}");
+}
+
 /// A TOML scene's model, and a bare model given on the command line: the
 /// file the user names may lie anywhere; what it names may not.
 #[test]

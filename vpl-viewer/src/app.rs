@@ -40,7 +40,7 @@ const PICK_RADIUS: f32 = 12.0;
 struct Wake;
 
 pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, ViewerError> {
-    let mut setup = SceneSetup::load(&options.scene)?;
+    let mut setup = SceneSetup::load_with(&options.scene, &options.load)?;
     // The VPL pipeline draws each material's diffuse albedo.
     setup.scene = setup.scene.with_material_policy(MaterialPolicy::Diffuse);
     // The window system, before anything loads a window-system or GPU

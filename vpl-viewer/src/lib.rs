@@ -114,6 +114,9 @@ pub struct ViewerOptions {
     pub reference: bool,
     /// A scripted session: the viewer runs it and closes (see [`script`]).
     pub script: Option<Script>,
+    /// Where the scene's files may be read from besides its folder (see
+    /// `vpl_core::sandbox`).
+    pub load: vpl_core::LoadOptions,
 }
 
 impl ViewerOptions {
@@ -132,6 +135,7 @@ impl ViewerOptions {
             exposure: 1.0,
             reference: false,
             script: None,
+            load: Default::default(),
         }
     }
 }

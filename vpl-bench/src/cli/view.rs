@@ -19,6 +19,9 @@ pub(super) struct Args {
     /// Scene: a built-in name or a scene file (.toml, .obj, .gltf, .glb, Mitsuba .xml).
     #[arg(long, default_value = "office")]
     scene: String,
+    /// Let the scene's files name files under this folder too (repeatable).
+    #[arg(long, value_name = "PATH")]
+    allow_outside: Vec<PathBuf>,
     /// VPL sampler of the left (or only) side: a registry name.
     #[arg(long, default_value = "ir")]
     sampler: String,
@@ -62,7 +65,7 @@ pub(super) struct Args {
 /// Runs `vpl view`.
 #[cfg(feature = "viewer")]
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
-    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, reference, script, quiet } = args;
+    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, reference, script, quiet, allow_outside } = args;
     let script = match script {
         Some(p) => {
             let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
@@ -90,6 +93,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         exposure,
         reference,
         script,
+        load: vpl_core::LoadOptions { allow_outside, memory_limit: None },
     };
     let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
     if !quiet {

@@ -97,8 +97,15 @@ pub fn load_mitsuba_in(path: &Path, params: &[(String, String)], sandbox: &Sandb
             }
         }
     }
-    let mut ctx =
-        Ctx { doc: &doc, ids, data: MitsubaData::default(), materials: HashMap::new(), sides: Vec::new(), emitters_used: Vec::new() };
+    let mut ctx = Ctx {
+        doc: &doc,
+        ids,
+        data: MitsubaData::default(),
+        materials: HashMap::new(),
+        sides: Vec::new(),
+        emitters_used: Vec::new(),
+        mesh_bytes: 0,
+    };
     let mut sensor_seen = false;
     for o in &doc.objects {
         match o.tag.as_str() {
@@ -148,6 +155,9 @@ pub(crate) struct Ctx<'a> {
     sides: Vec<bool>,
     /// Area emitters that shapes referenced.
     emitters_used: Vec<*const Object>,
+    /// Bytes of mesh files read so far, all shapes together: a scene may
+    /// name one file from many shapes, and each is read and expanded.
+    mesh_bytes: u64,
 }
 
 impl<'a> Ctx<'a> {

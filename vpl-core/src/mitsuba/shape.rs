@@ -25,6 +25,20 @@ impl Ctx<'_> {
                     return Err(self.doc.err(s.at, format!("{} needs a filename", s.what())));
                 };
                 let path = self.doc.resolve(&name, s.at)?;
+                // The mesh files of all shapes together stay within the
+                // memory limit (or the size limit of one mesh file).
+                let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+                let limit = self.doc.sandbox.memory_limit().unwrap_or(crate::input::MAX_MESH_BYTES).min(crate::input::MAX_MESH_BYTES);
+                self.mesh_bytes = self.mesh_bytes.saturating_add(size);
+                if self.mesh_bytes > limit {
+                    return Err(self.doc.err(
+                        s.at,
+                        format!(
+                            "{}: the scene's mesh files come to more than {limit} bytes (a file named by many shapes counts each time)",
+                            s.what()
+                        ),
+                    ));
+                }
                 let mut mesh = if s.ty == "obj" {
                     let bytes = crate::input::read_bytes(&path, crate::input::MAX_MESH_BYTES)?;
                     // The OBJ's own materials are not Mitsuba's: the shape's BSDF decides.

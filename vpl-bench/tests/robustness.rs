@@ -162,6 +162,26 @@ fn memory_and_threads_are_decided_before_the_work() {
         );
         refused(&o, "camera-samples", "2^32 camera samples");
     }
+    // A bitmap texture is decoded within --memory-limit (it peaked at 1.8 GiB
+    // under 256M): a 512² RGB texture (768 KiB decoded) under 512K is refused
+    // naming the limit, and renders under 256M.
+    let rgb = vec![200u8; 512 * 512 * 3];
+    std::fs::write(d.join("t.png"), vpl_core::image::encode_png_rgb8(512, 512, &rgb).unwrap()).unwrap();
+    let textured = write(
+        &d,
+        "t.xml",
+        "<scene version=\"3.0.0\"><bsdf type=\"diffuse\" id=\"b\"><texture type=\"bitmap\" name=\"reflectance\">\
+         <string name=\"filename\" value=\"t.png\"/></texture></bsdf><shape type=\"cube\"><ref id=\"b\"/></shape>\
+         <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"3\" z=\"3\"/><rgb name=\"intensity\" value=\"5\"/></emitter>\
+         <sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0, 2, 5\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform></sensor></scene>",
+    );
+    refused(
+        &render(&["--scene", &textured, "--spp", "1", "--memory-limit", "512K"], &out),
+        "decoding its 512×512 pixels takes more than the memory limit",
+        "bitmap under 512K",
+    );
+    let o = render(&["--scene", &textured, "--spp", "1", "--memory-limit", "256M"], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     refused(&render(&["--scene", "cornell", "--threads", "100000"], &out), "--threads 100000", "threads");
     refused(&render(&["--scene", "cornell", "--memory-limit", "lots"], &out), "memory limit 'lots'", "limit syntax");
     // The summary reports the estimate beside the peak.

@@ -139,8 +139,7 @@ impl KnnDensity {
         if m == 0 || self.points.is_empty() {
             return Vec::new();
         }
-        let tree = self.accepted.get_or_init(|| AcceptTree::new(&self.points));
-        tree.nearest_accepted(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
+        self.accepted().nearest_accepted(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
     }
 
     /// Every point of the set within squared distance `r2` of `q`, as
@@ -158,7 +157,12 @@ impl KnnDensity {
         if n < 2 {
             return vec![None; n];
         }
-        self.accepted.get_or_init(|| AcceptTree::new(&self.points)).members_nearest()
+        self.accepted().members_nearest()
+    }
+
+    /// The k-d tree of the predicate queries, built on first use.
+    fn accepted(&self) -> &AcceptTree {
+        self.accepted.get_or_init(|| AcceptTree::new(&self.points))
     }
 
     /// Density at every point of the set from its `k` nearest other points,

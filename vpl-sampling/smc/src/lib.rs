@@ -37,7 +37,7 @@
 //! paper's. A VPL shines from its own point, or with
 //! [`Placement::Centroid`] from the probe of its cell nearest the cell's
 //! centroid (a VPL at the edge of its cell is a quadrature point off
-//! centre, which leaves the Munich blocks 4 % too bright; derivation and
+//! centre, which leaves the Munich blocks 6 % too bright; derivation and
 //! measurements in [`Placement`]'s module).
 //!
 //! One departure from the paper: a VPL's flux uses a second radiosity

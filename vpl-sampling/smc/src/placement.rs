@@ -42,16 +42,20 @@
 //! cell's flux is its area times its mean candidate radiance, so its light
 //! is spread as its area is.
 //!
-//! Measured (unclamped indirect image over path tracing's, I = 2048, 96×72,
-//! seeds 0–2, `vpl render`): the Munich blocks 1.041 at the sites, 0.994
-//! with this placement; `atrium` 0.999 and 0.996; `office` 1.019 and
-//! 1.018; `cornell` 0.997 and 1.000; Dabrovic's Sponza 0.993 and
-//! **0.970**. On Sponza the cells' own fluxes are dark: 2.4 % of the
-//! candidates' light lies in probes that none of the four nearest VPLs on
-//! their surface, nor of the four around an edge, sees; they belong to no
-//! cell, and the sites' placement error had offset that. In Table 1
-//! neither placement wins on both |E| and |E′| (the differences lie within
-//! the intervals), so the site stays the default.
+//! Measured with the cells that partition the probes (see `flux`'s
+//! "Which cell"; unclamped, ray-traced, exhaustive indirect image over
+//! path tracing's, I = 2048 after the 100-iteration warm-up, frame 0,
+//! `tests/tests/smc.rs`; sites then centroids): `cornell` (64×64, 3
+//! seeds) 0.992 and 1.000; `office` (64×48) 1.013 and 1.011; `atrium`
+//! (64×48) 1.025 and 1.025; at the centroids, Dabrovic's Sponza (96×72, 4
+//! seeds) 1.008 ± 0.007 and the Munich blocks (96×72, 16 seeds) 1.045 ±
+//! 0.014, whose seeds spread widely (a VPL beside a façade lights the
+//! pixels near it at 1/d²: 0.975 to 1.171). Before the partition, when
+//! probes no tried VPL saw were dropped, Sponza was 0.978 and the Munich
+//! blocks 1.020 ± 0.015 (20 seeds); the sites on Munich 1.060 ± 0.009. In
+//! Table 1 neither placement won on both |E| and |E′| when it was last
+//! measured (the differences lay within the intervals), so the site stays
+//! the default.
 //!
 //! The particle keeps its own point for every decision of Algorithm 1
 //! (densities, intensities, mailboxes); only the VPL handed to the renderer

@@ -261,6 +261,13 @@ impl SmcSampler {
 
     /// One iteration of Algorithm 1 (lines 3–19) for `camera` over `scene`,
     /// step by step; the first call initialises Y from candidates (line 1).
+    ///
+    /// Each call is a frame: with [`Placement::Centroid`] the VPLs take
+    /// their cells' probes at once in the first call, from cells measured
+    /// by one iteration of probes, and later calls move at most M_max of
+    /// them. [`VplSampler::next_frame`] runs the warm-up without placing
+    /// anyone, so its first frame places every VPL from cells measured over
+    /// all T iterations; drive the sampler through it to render.
     pub fn iterate(&mut self, scene: &Scene, camera: &Camera, seed: u64) -> &VplSet {
         let start = Instant::now();
         let mut st = SmcStats { iterations: self.iterations + 1, ..SmcStats::default() };

@@ -172,7 +172,7 @@ mod tests {
         }
         assert!(matches!(build("xyz", b, &[]), Err(SamplingError::Unknown(..))));
         let e = build("smc", b, &["resample-ratio=0"]).err().unwrap();
-        assert_eq!(e.to_string(), "sampler 'smc': resample-ratio=0: must be at least 1");
+        assert_eq!(e.to_string(), "sampler 'smc': resample-ratio=0: must be from 1 to 16777216");
     }
 
     #[test]

@@ -82,8 +82,10 @@
 //!   grows along its surface around what hides it: the four nearest VPLs
 //!   can all stand behind a column or a balustrade while the one whose cell
 //!   holds the surface next to the probe sees it. A probe that sees none
-//!   of these joins its nearest VPL on its side of the surface, else its
-//!   nearest VPL, so the cells **partition** the probes: every usable probe
+//!   of these joins the cell of its nearest owned probe on its surface
+//!   (unseen: the light stays where the surface is), else its nearest VPL
+//!   on its side of the surface, else its nearest VPL, so the cells
+//!   **partition** the probes: every usable probe
 //!   (a hit with an area) belongs to exactly one cell, the cells' areas sum
 //!   to the probes' area and their light to the light the candidates
 //!   carry, for any set (tested). Without the last step 2.4 % of the
@@ -91,9 +93,11 @@
 //!   (frame 0, I = 2048) belonged to no cell and was lost; with the VPLs
 //!   at their cells' centroids ([`crate::Placement::Centroid`]) Sponza's
 //!   image was 0.970 of the path tracer's, 0.978 with the neighbours, and
-//!   1.008 ± 0.007 with the whole partition (the Munich blocks 1.045 ±
-//!   0.014: the light of a probe whose owner cannot see it is conserved,
-//!   but shines from that owner's place). Without the sides, the back of a thin
+//!   1.002 ± 0.004 with the whole partition (the Munich blocks 1.038 ±
+//!   0.013; with the nearest VPL on the side as the last step instead of
+//!   the nearest owned probe's cell, 1.008 and 1.045: the light of a probe
+//!   whose owner cannot see it is conserved, but shines from the owner's
+//!   place). Without the sides, the back of a thin
 //!   wall, lit from a room, would take a corridor VPL's cell; without the
 //!   visibility, the floor of a room behind a wall, which the camera
 //!   glimpses through a door, would lend its area to a corridor VPL beside
@@ -491,18 +495,28 @@ impl AreaProbes {
             self.write_owners(live, todo, &owner);
         }
         // Last, so that the cells partition the probes: a probe that sees
-        // none of the VPLs it tried joins its nearest VPL on its side of the
+        // none of the VPLs it tried joins the cell of its nearest owned
+        // probe on its surface, else its nearest VPL on its side of the
         // surface, else its nearest VPL. Every usable probe then belongs to
         // exactly one cell, and the cells' areas sum to the probes' area
         // (their light to the candidates' light) for any set.
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
-        let batches = &self.batches;
+        let (batches, trees) = (&self.batches, &self.trees);
         let last: Vec<Option<usize>> = open
             .par_iter()
             .map(|&t| {
-                let q = &batches[todo[t].0][todo[t].1];
-                let same_side = tree.nearest_accepted(q.p, None, |i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
-                same_side.or_else(|| tree.nearest_accepted(q.p, None, |_| true)).map(|(i, _)| i)
+                let (b, k) = todo[t];
+                let (batch, q) = (&batches[b], &batches[b][k]);
+                // The cell of its nearest owned neighbour on its surface
+                // keeps its light where the surface is.
+                let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
+                let neighbour = trees[b]
+                    .nearest_accepted(q.p, Some(k), |j| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some())
+                    .and_then(|(j, _)| owned_here(&batch[j]));
+                neighbour.or_else(|| {
+                    let same_side = tree.nearest_accepted(q.p, None, |i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
+                    same_side.or_else(|| tree.nearest_accepted(q.p, None, |_| true)).map(|(i, _)| i)
+                })
             })
             .collect();
         for (&t, o) in open.iter().zip(last) {

@@ -46,11 +46,11 @@
 //! "Which cell"; unclamped, ray-traced, exhaustive indirect image over
 //! path tracing's, I = 2048 after the 100-iteration warm-up, frame 0,
 //! `tests/tests/smc.rs`; sites then centroids): `cornell` (64×64, 3
-//! seeds) 0.992 and 1.000; `office` (64×48) 1.013 and 1.011; `atrium`
+//! seeds) 0.992 and 1.000; `office` (64×48) 1.014 and 1.011; `atrium`
 //! (64×48) 1.025 and 1.025; at the centroids, Dabrovic's Sponza (96×72, 4
-//! seeds) 1.008 ± 0.007 and the Munich blocks (96×72, 16 seeds) 1.045 ±
-//! 0.014, whose seeds spread widely (a VPL beside a façade lights the
-//! pixels near it at 1/d²: 0.975 to 1.171). Before the partition, when
+//! seeds) 1.002 ± 0.004 and the Munich blocks (96×72, 16 seeds) 1.038 ±
+//! 0.013, whose seeds spread widely (a VPL beside a façade lights the
+//! pixels near it at 1/d²: 0.990 to 1.165). Before the partition, when
 //! probes no tried VPL saw were dropped, Sponza was 0.978 and the Munich
 //! blocks 1.020 ± 0.015 (20 seeds); the sites on Munich 1.060 ± 0.009. In
 //! Table 1 neither placement won on both |E| and |E′| when it was last

@@ -98,7 +98,7 @@ fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSp
         budget: Budget::new(s.vpls, 5),
         visibility: VisibilitySpec::RayTraced,
         shading: ShadingSpec::Exhaustive,
-        clamp: Some(clamp),
+        clamp: vpl_render::Clamp::Value(clamp),
         compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,

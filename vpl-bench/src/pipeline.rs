@@ -2,7 +2,7 @@
 //! parameters, budget, stages, backend), which experiments store and
 //! compare, built into a [`vpl_render::Renderer`].
 
-use vpl_core::{Budget, GeometryClamp, Mode, Params, Scene};
+use vpl_core::{Budget, Mode, Params, Scene};
 use vpl_render::{Clamp, RenderError, Renderer};
 use vpl_sampling::Registry;
 
@@ -56,8 +56,9 @@ pub struct PipelineSpec {
     pub visibility: VisibilitySpec,
     /// Shading.
     pub shading: ShadingSpec,
-    /// Geometry-term clamp.
-    pub clamp: Option<GeometryClamp>,
+    /// Geometry-term clamp: a value, or a rule the renderer resolves (the
+    /// view rule follows the camera).
+    pub clamp: Clamp,
     /// Gather rays per pixel of the clamp's bias compensation (0: none).
     pub compensation: u32,
     /// Which paths the frames include.
@@ -80,7 +81,7 @@ impl PipelineSpec {
             .params(self.params.clone())
             .visibility(self.visibility)
             .shader(self.shading)
-            .clamp(Clamp::from(self.clamp))
+            .clamp(self.clamp)
             .compensation(self.compensation)
             .mode(self.mode)
             .direct_samples(self.direct_samples)

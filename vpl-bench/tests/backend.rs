@@ -21,7 +21,7 @@ fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: u
         budget: Budget::new(vpls, 5),
         visibility,
         shading: ShadingSpec::Interleaved { filter: true },
-        clamp: Some(clamp),
+        clamp: vpl_render::Clamp::Value(clamp),
         compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,

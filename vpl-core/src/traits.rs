@@ -142,4 +142,7 @@ pub trait IndirectShader: Send {
     /// Reflected radiance from `vpls` at each pixel of `gbuf` (zero where the
     /// camera sees nothing that reflects).
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image;
+    /// The geometry-term clamp of the frames after this call (`None`: off);
+    /// a renderer whose clamp follows the view sets it when the camera moves.
+    fn set_clamp(&mut self, clamp: Option<crate::clamp::GeometryClamp>);
 }

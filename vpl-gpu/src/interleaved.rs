@@ -254,6 +254,11 @@ impl GpuInterleavedShader {
 }
 
 impl IndirectShader for GpuInterleavedShader {
+    fn set_clamp(&mut self, clamp: Option<GeometryClamp>) {
+        // The kernels read G_max from the CPU twin's clamp at each frame.
+        self.cpu.clamp = clamp;
+    }
+
     fn name(&self) -> &'static str {
         if self.exhaustive { "exhaustive" } else { "interleaved" }
     }

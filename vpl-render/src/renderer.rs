@@ -197,6 +197,7 @@ impl<'a> RendererBuilder<'a> {
             seed: self.seed,
             clamp_rule: self.clamp,
             clamp,
+            clamp_view: None,
             compensation: self.compensation,
             shading: self.shading,
             backend,
@@ -218,6 +219,8 @@ pub struct Renderer {
     seed: u64,
     clamp_rule: Clamp,
     clamp: Option<GeometryClamp>,
+    /// The camera the view rule's clamp was resolved for.
+    clamp_view: Option<Camera>,
     compensation: u32,
     shading: ShadingSpec,
     backend: Box<dyn Backend>,
@@ -269,12 +272,22 @@ impl Renderer {
         time: f32,
         cancel: &AtomicBool,
     ) -> Result<FrameOutput, RenderError> {
+        // The view rule follows the camera: resolved at the first frame and
+        // again whenever the camera has moved.
+        let view_rule = self.clamp_rule == Clamp::Auto;
+        let moved = view_rule && self.clamp_view.as_ref() != Some(camera);
+        if moved {
+            self.clamp = self.clamp_rule.resolve(self.budget.vpls, scene, camera);
+            self.clamp_view = Some(camera.clone());
+        }
         let shader = match &mut self.shader {
-            Some(shader) => shader,
-            unbuilt => {
-                self.clamp = self.clamp_rule.resolve(self.budget.vpls, scene, camera);
-                unbuilt.insert(self.backend.shader(self.shading, self.clamp, self.seed)?)
+            Some(shader) => {
+                if moved {
+                    shader.set_clamp(self.clamp);
+                }
+                shader
             }
+            unbuilt => unbuilt.insert(self.backend.shader(self.shading, self.clamp, self.seed)?),
         };
         let compensation = match self.clamp {
             Some(clamp) if self.compensation > 0 => Some(Compensation { clamp, gather_rays: self.compensation }),
@@ -320,7 +333,7 @@ impl Renderer {
     }
 
     /// The geometry clamp of the shader: `None` when off, and under
-    /// [`Clamp::Auto`] until the first frame has fixed it from its view.
+    /// [`Clamp::Auto`] until the first frame; then the last frame's view's.
     pub fn clamp(&self) -> Option<GeometryClamp> {
         self.clamp
     }

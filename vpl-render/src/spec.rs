@@ -40,9 +40,9 @@ impl Default for ShadingSpec {
 /// The geometry-term clamp of VPL shading.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Clamp {
-    /// G_max = I / A_view from the view of the first frame a renderer draws
-    /// ([`GeometryClamp::for_view`]), kept for the frames after it so that a
-    /// moving camera does not make the clamp flicker.
+    /// G_max = I / A_view from the view of each frame a renderer draws
+    /// ([`GeometryClamp::for_view`]): it follows the camera (resolved anew
+    /// when the camera moves, and kept while it stands still).
     #[default]
     Auto,
     /// G_max = I / A with A the whole scene's surface area

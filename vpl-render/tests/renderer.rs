@@ -114,10 +114,11 @@ fn a_non_finite_vpl_fails_the_frame_naming_the_stage() {
     assert!(e.to_string().contains("the VPL sampler produced 1 non-finite value"), "{e}");
 }
 
-/// The default clamp is resolved from the first frame's view and kept when
-/// the camera moves; a rule that needs no view is resolved at build time.
+/// The default clamp is resolved from the first frame's view and follows
+/// the camera when it moves; a rule that needs no view is resolved at build
+/// time.
 #[test]
-fn the_view_clamp_is_fixed_by_the_first_frame() {
+fn the_view_clamp_is_resolved_at_the_first_frame_and_follows_the_camera() {
     let setup = SceneSetup::load("office").unwrap();
     let near = setup.camera.with_resolution((16, 12)).unwrap();
     let far = near.looking(near.origin - near.forward() * 10.0, near.target).unwrap();
@@ -129,7 +130,7 @@ fn the_view_clamp_is_fixed_by_the_first_frame() {
     r.render(&setup.scene, &near, 0, 0.0).unwrap();
     assert_eq!(r.clamp(), Some(g_near));
     r.render(&setup.scene, &far, 1, 0.0).unwrap();
-    assert_eq!(r.clamp(), Some(g_near), "the clamp must not follow the camera");
+    assert_eq!(r.clamp(), Some(g_far), "the clamp follows the camera");
     let r = Renderer::builder(&setup.scene).vpls(64).clamp(Clamp::SceneArea).build().unwrap();
     assert_eq!(r.clamp(), Some(GeometryClamp::for_scene_area(64, setup.scene.surface_area())));
     assert!(r.shader().is_some());
@@ -200,4 +201,43 @@ fn a_cancelled_frame_stops_and_leaves_the_renderer_in_step() {
     let f2 = r.render_cancellable(&frames[2].0, &cam(2), 2, 0.0, &FLAG).unwrap();
     assert!(f2.moved > 0, "no slot moved on frame 2");
     assert!(f2.image.data == plain_frames[2].data, "the frame after a cancelled one differs from an uncancelled renderer's");
+}
+
+/// The view rule's G_max follows the camera: a camera that moves in from
+/// the box's opening to its middle sees less surface, so A_view falls and
+/// G_max = I / A_view rises; the renderer takes the new clamp at the frame
+/// the camera moves, and shades with it: its image equals the stages'
+/// with that clamp. A camera that stands still keeps the clamp.
+#[test]
+fn the_auto_clamp_follows_the_view() {
+    let setup = SceneSetup::load("cornell").unwrap();
+    let far = setup.camera.with_resolution((24, 24)).unwrap();
+    let near = far.looking(far.origin * 0.4, far.target).unwrap();
+    let mut renderer = Renderer::builder(&setup.scene)
+        .vpls(96)
+        .max_depth(4)
+        .sampler("ir")
+        .visibility(VisibilitySpec::RayTraced)
+        .shader(ShadingSpec::Exhaustive)
+        .seed(5)
+        .build()
+        .unwrap();
+    let (c_far, c_near) = (GeometryClamp::for_view(96, &setup.scene, &far), GeometryClamp::for_view(96, &setup.scene, &near));
+    assert!(c_near.g_max > 1.2 * c_far.g_max, "{c_far:?} {c_near:?}");
+    renderer.render(&setup.scene, &far, 0, 0.0).unwrap();
+    assert_eq!(renderer.clamp(), Some(c_far));
+    renderer.render(&setup.scene, &far, 1, 0.0).unwrap();
+    assert_eq!(renderer.clamp(), Some(c_far));
+    let built = renderer.render(&setup.scene, &near, 2, 0.0).unwrap();
+    assert_eq!(renderer.clamp(), Some(c_near));
+    // The same frame by hand with the near clamp: the shader used it.
+    let mut ir = InstantRadiosity::new(IrConfig { vpls: 96, bounces: 2, ..IrConfig::default() }).unwrap();
+    let mut vis = RayTraced::default();
+    let mut shader = ExhaustiveShader { clamp: Some(c_far) };
+    let s = |index| FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 16, seed: 5, index, time: 0.0, compensation: None };
+    render_frame(&setup.scene, &far, s(0), None, &mut ir, &mut vis, &mut shader);
+    render_frame(&setup.scene, &far, s(1), None, &mut ir, &mut vis, &mut shader);
+    shader.clamp = Some(c_near);
+    let by_hand = render_frame(&setup.scene, &near, s(2), None, &mut ir, &mut vis, &mut shader);
+    assert!(built.image.data == by_hand.image.data, "the renderer did not shade with the near view's clamp");
 }

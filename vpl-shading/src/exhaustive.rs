@@ -18,6 +18,10 @@ pub struct ExhaustiveShader {
 }
 
 impl IndirectShader for ExhaustiveShader {
+    fn set_clamp(&mut self, clamp: Option<vpl_core::GeometryClamp>) {
+        self.clamp = clamp;
+    }
+
     fn name(&self) -> &'static str {
         "exhaustive"
     }

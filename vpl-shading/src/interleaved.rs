@@ -132,6 +132,10 @@ impl InterleavedShader {
 }
 
 impl IndirectShader for InterleavedShader {
+    fn set_clamp(&mut self, clamp: Option<GeometryClamp>) {
+        self.clamp = clamp;
+    }
+
     fn name(&self) -> &'static str {
         "interleaved"
     }

@@ -82,13 +82,17 @@ impl ClampArg {
     /// The clamp for a budget of `vpls` VPLs in `scene` seen by `camera`
     /// (the renderer's rules, [`vpl_render::Clamp::resolve`]).
     pub fn resolve(self, vpls: usize, scene: &vpl_core::Scene, camera: &vpl_core::Camera) -> Option<vpl_core::GeometryClamp> {
-        let rule = match self {
+        self.rule().resolve(vpls, scene, camera)
+    }
+
+    /// The renderer's rule for this flag.
+    pub fn rule(self) -> vpl_render::Clamp {
+        match self {
             ClampArg::Off => vpl_render::Clamp::Off,
             ClampArg::Auto => vpl_render::Clamp::Auto,
             ClampArg::Area => vpl_render::Clamp::SceneArea,
             ClampArg::Value(v) => vpl_render::Clamp::Value(vpl_core::GeometryClamp::new(v)),
-        };
-        rule.resolve(vpls, scene, camera)
+        }
     }
 }
 

@@ -621,7 +621,7 @@ fn pipeline_spec(
     vpls: usize,
     max_depth: u32,
     mode: ModeArg,
-    clamp: Option<vpl_core::GeometryClamp>,
+    clamp: vpl_render::Clamp,
     seed: u64,
 ) -> Res<crate::pipeline::PipelineSpec> {
     use crate::pipeline::{PipelineSpec, ShadingSpec, VisibilitySpec};
@@ -646,8 +646,10 @@ fn pipeline_spec(
         clamp,
         compensation: match (v.compensate, clamp) {
             (0, _) => 0,
-            (_, None) => return Err("--compensate adds back what the clamp removes: it needs a clamp (--clamp is off)".into()),
-            (n, Some(_)) => n,
+            (_, vpl_render::Clamp::Off) => {
+                return Err("--compensate adds back what the clamp removes: it needs a clamp (--clamp is off)".into());
+            }
+            (n, _) => n,
         },
         mode: mode_of(mode),
         direct_samples: v.direct_samples,

@@ -208,7 +208,7 @@ fn render_vpl(
     let sc = with_policy(sc, vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)");
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
     let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera);
-    let spec = pipeline_spec(v, vpls, max_depth, mode, clamp, seed)?;
+    let spec = pipeline_spec(v, vpls, max_depth, mode, clamp.into(), seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &sc)?;

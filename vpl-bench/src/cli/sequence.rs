@@ -69,7 +69,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         None => setup.camera.resolution,
     };
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    // The clamp of the whole run, from the view of its first frame (a moving camera keeps it).
+    // The first frame's camera, for the warnings below.
     let first = setup.camera_at_frame(range.start).map_err(|e| e.to_string())?.with_resolution(res).map_err(|e| e.to_string())?;
     if let Some(note) = setup
         .scene
@@ -80,8 +80,8 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if let Some(w) = vpl_core::view::check_view(&setup.scene, &first) {
         eprintln!("vpl: warning: frame {}: {w}", range.start);
     }
-    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &setup.scene, &first);
-    let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp, seed)?;
+    // The clamp's rule goes to the renderer: the view rule follows the camera.
+    let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp.unwrap_or(ClampArg::Auto).rule(), seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &setup.scene)?;

@@ -562,7 +562,7 @@ pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: Geomet
         budget: Budget::new(vpls, spec.max_depth),
         visibility: VisibilitySpec::ShadowMaps(spec.shadow_map_res),
         shading: ShadingSpec::Interleaved { filter: true },
-        clamp: Some(clamp),
+        clamp: vpl_render::Clamp::Value(clamp),
         compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,

@@ -161,8 +161,9 @@ impl OutDir {
         }
         let created = !path.exists();
         std::fs::create_dir_all(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
-        let write_to = if created { path.to_path_buf() } else { path.join(format!(".vpl-staging.{}", std::process::id())) };
+        let write_to = if created { path.to_path_buf() } else { path.join(format!("{STAGING}{}", std::process::id())) };
         if !created {
+            remove_stale_staging(path);
             let _ = std::fs::remove_dir_all(&write_to);
             std::fs::create_dir(&write_to).map_err(|e| format!("cannot write into {}: {e}", path.display()))?;
         }
@@ -196,6 +197,26 @@ impl Drop for OutDir {
         if !self.kept {
             untrack(&self.path);
             let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}
+
+/// The name of a staging folder, before its process id.
+const STAGING: &str = ".vpl-staging.";
+
+/// Removes the staging folders in `dir` of processes that no longer run
+/// (killed with SIGKILL, or a machine that went down). Where the process
+/// table cannot be read (no `/proc`), nothing is removed.
+fn remove_stale_staging(dir: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = name.strip_prefix(STAGING).and_then(|p| p.parse::<u32>().ok()) else { continue };
+        if pid != std::process::id() && !Path::new("/proc").join(pid.to_string()).exists() && e.path().is_dir() {
+            let _ = std::fs::remove_dir_all(e.path());
         }
     }
 }
@@ -334,6 +355,11 @@ mod tests {
         }
         assert_eq!(listing(&root.join("old")), ["mine.txt", "x.csv"]);
         assert_eq!(std::fs::read_to_string(root.join("old/x.csv")).unwrap(), "earlier");
+        // The staging folder of a process killed outright (no such process:
+        // pid 4194304 is past Linux's largest) goes with the next command.
+        std::fs::create_dir_all(root.join("old/.vpl-staging.4194304/sub")).unwrap();
+        drop(OutDir::create("--out", &root.join("old")).unwrap());
+        assert_eq!(listing(&root.join("old")), ["mine.txt", "x.csv"]);
         // Kept, what it wrote takes its place, subfolders included.
         let d = OutDir::create("--out", &root.join("old")).unwrap();
         std::fs::write(d.path().join("x.csv"), "1").unwrap();

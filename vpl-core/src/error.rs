@@ -34,7 +34,9 @@ pub enum CoreError {
     },
     /// A scene file names a file outside the scene's folder (see
     /// [`crate::sandbox`]).
-    #[error("the reference '{reference}' leaves the scene's folder {root}; pass --allow-outside with a folder that holds it to allow it")]
+    #[error(
+        "the reference '{reference}' leaves the scene's folder {root}; allow a folder that holds it to read it (--allow-outside PATH, or allow_outside)"
+    )]
     OutsideScene {
         /// The reference as the scene file writes it.
         reference: String,

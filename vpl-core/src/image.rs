@@ -302,31 +302,51 @@ fn remove_stale_temporaries(dir: &Path, name: &str) {
 /// written, since the rename would put a regular file in its place (an
 /// output named `/dev/null`, run as root, would replace the system's).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let _writing = begin_write();
+    let tmp = write_temporary(path, bytes)?;
+    let renamed = std::fs::rename(&tmp, path);
+    forget_temporary(&tmp, renamed.is_err());
+    renamed.map_err(|e| CoreError::Write { path: path.into(), reason: e.to_string() })
+}
+
+/// The checks of an output and its temporary: `bytes` written and flushed
+/// to `.NAME.PID.tmp` beside `path` (registered for
+/// [`remove_temporaries`]; stale temporaries of the same output removed
+/// first). `path`'s folder must exist and `path` must be a new name or a
+/// regular file. On failure nothing is left. The caller holds
+/// [`begin_write`]'s guard.
+fn write_temporary(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
     let err = |reason: String| CoreError::Write { path: path.into(), reason };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = crate::input::folder_of(path);
     if !dir.is_dir() {
         return Err(err(format!("directory {} does not exist", dir.display())));
     }
     check_replaceable(path)?;
     let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
-    let _writing = begin_write();
     remove_stale_temporaries(&dir, &name);
     let tmp = dir.join(temporary_name(&name, std::process::id()));
     IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
-    let result = (|| -> std::io::Result<()> {
+    let written = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        f.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match written {
+        Ok(()) => Ok(tmp),
+        Err(e) => {
+            forget_temporary(&tmp, true);
+            Err(err(e.to_string()))
+        }
     }
-    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != &tmp);
-    result.map_err(|e| err(e.to_string()))
+}
+
+/// Takes `tmp` off the temporaries in flight, removing the file when
+/// `remove`.
+fn forget_temporary(tmp: &Path, remove: bool) {
+    if remove {
+        let _ = std::fs::remove_file(tmp);
+    }
+    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != tmp);
 }
 
 /// The outputs of one command, written together: each is staged to a
@@ -353,50 +373,46 @@ impl Staging {
     /// Stages `bytes` as the future content of `path` (checked as
     /// [`write_atomic`] checks it). Staging the same path twice is an error.
     pub fn stage(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
-        let err = |reason: String| CoreError::Write { path: path.into(), reason };
-        if self.staged.iter().any(|(p, _)| p == path) {
-            return Err(err("the command writes it twice".into()));
-        }
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        if !dir.is_dir() {
-            return Err(err(format!("directory {} does not exist", dir.display())));
-        }
-        check_replaceable(path)?;
-        let name = path.file_name().ok_or_else(|| err("no file name".into()))?.to_string_lossy().into_owned();
+        self.check_new(path)?;
         let _writing = begin_write();
-        remove_stale_temporaries(&dir, &name);
-        let tmp = dir.join(temporary_name(&name, std::process::id()));
-        IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
-        let written = (|| -> std::io::Result<()> {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(bytes)?;
-            f.sync_all()
-        })();
-        if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
-            IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner()).retain(|p| p != &tmp);
-            return Err(err(e.to_string()));
-        }
+        let tmp = write_temporary(path, bytes)?;
         self.staged.push((path.to_path_buf(), tmp));
         Ok(())
     }
 
-    /// The paths staged so far.
-    pub fn paths(&self) -> impl Iterator<Item = &Path> {
-        self.staged.iter().map(|(p, _)| p.as_path())
+    /// Stages `file`, already written on the same file system (in a staging
+    /// folder of the caller's), as the future content of `path`. `path`
+    /// must be a new name or a regular file; its folder is made at the
+    /// commit if it is missing (and removed again if the commit fails).
+    /// An adopted file that is not committed is removed on drop.
+    pub fn adopt(&mut self, path: &Path, file: PathBuf) -> Result<()> {
+        self.check_new(path)?;
+        check_replaceable(path)?;
+        self.staged.push((path.to_path_buf(), file));
+        Ok(())
+    }
+
+    /// Refuses a path staged already.
+    fn check_new(&self, path: &Path) -> Result<()> {
+        if self.staged.iter().any(|(p, _)| p == path) {
+            return Err(CoreError::Write { path: path.into(), reason: "the command writes it twice".into() });
+        }
+        Ok(())
     }
 
     /// Renames every staged output into place, all or none (see the type).
     pub fn commit(mut self) -> Result<()> {
         let _writing = begin_write();
         let staged = std::mem::take(&mut self.staged);
-        // (final path, its backup if it existed)
+        // (final path, its backup if it existed), and the folders made.
         let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
+        let mut made: Vec<PathBuf> = Vec::new();
         let mut failure = None;
         for (path, tmp) in &staged {
+            if let Err(e) = make_folder(&crate::input::folder_of(path), &mut made) {
+                failure = Some(CoreError::Write { path: path.clone(), reason: e.to_string() });
+                break;
+            }
             let backup = path.with_file_name(format!(
                 "{}{}.bak",
                 temporary_stem(&path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
@@ -426,12 +442,9 @@ impl Staging {
             }
             done.push((path.clone(), kept));
         }
-        let mut in_flight = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
         for (_, tmp) in &staged {
-            let _ = std::fs::remove_file(tmp);
-            in_flight.retain(|p| p != tmp);
+            forget_temporary(tmp, true);
         }
-        drop(in_flight);
         match failure {
             None => {
                 for (_, backup) in done {
@@ -453,19 +466,36 @@ impl Staging {
                         }
                     }
                 }
+                for dir in made.into_iter().rev() {
+                    let _ = std::fs::remove_dir(dir);
+                }
                 Err(e)
             }
         }
     }
 }
 
+/// Makes `dir` and the folders above it that are missing, recording each
+/// made in `made` (outermost first).
+fn make_folder(dir: &Path, made: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    let mut missing = Vec::new();
+    let mut p = dir;
+    while !p.as_os_str().is_empty() && !p.exists() {
+        missing.push(p.to_path_buf());
+        p = p.parent().unwrap_or(Path::new(""));
+    }
+    for m in missing.into_iter().rev() {
+        std::fs::create_dir(&m)?;
+        made.push(m);
+    }
+    Ok(())
+}
+
 impl Drop for Staging {
     /// Outputs never committed are removed.
     fn drop(&mut self) {
-        let mut in_flight = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
         for (_, tmp) in self.staged.drain(..) {
-            let _ = std::fs::remove_file(&tmp);
-            in_flight.retain(|p| p != &tmp);
+            forget_temporary(&tmp, true);
         }
     }
 }

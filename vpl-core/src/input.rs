@@ -80,6 +80,14 @@ fn open_without_blocking(path: &Path) -> std::io::Result<std::fs::File> {
     options.open(path)
 }
 
+/// The folder of `path`: its parent, or `.` for a bare name.
+pub fn folder_of(path: &Path) -> std::path::PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    }
+}
+
 /// What a path that is no regular file is, in words ("a directory", "a
 /// device", "a pipe", "a socket").
 pub fn kind_of(meta: &std::fs::Metadata) -> &'static str {

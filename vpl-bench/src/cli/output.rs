@@ -179,14 +179,14 @@ impl OutDir {
 
     /// The command succeeded: what it wrote takes its place.
     pub fn keep(mut self) -> Res<()> {
-        // An interrupt waits until every file has moved (or moved back).
-        let _writing = vpl_core::image::begin_write();
         self.kept = true;
-        untrack(&self.path);
         if self.created {
+            untrack(&self.path);
             return Ok(());
         }
         let result = commit_tree(&self.path, &self.target);
+        // Tracked until here: an interrupt before the commit removes it.
+        untrack(&self.path);
         let _ = std::fs::remove_dir_all(&self.path);
         result
     }
@@ -222,80 +222,18 @@ fn remove_stale_staging(dir: &Path) {
 }
 
 /// Moves every file under `from` to the same place under `to`, all or
-/// none: folders are made as needed, a file in the way is kept under a
-/// backup name until every move succeeded, and on a failure the moved
-/// files go back, the backups are restored and the made folders removed.
+/// none, through [`vpl_core::image::Staging`]: folders are made as needed,
+/// a file in the way is kept under a backup name until every move
+/// succeeded, and on a failure the moved files go back, the backups are
+/// restored and the made folders removed.
 fn commit_tree(from: &Path, to: &Path) -> Res<()> {
     let mut moves = Vec::new();
     collect_files(from, to, &mut moves).map_err(|e| format!("cannot read {}: {e}", from.display()))?;
-    let pid = std::process::id();
-    // (destination, its backup), and the folders made, in order.
-    let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
-    let mut made: Vec<PathBuf> = Vec::new();
-    let mut failure = None;
-    for (src, dst) in &moves {
-        let step = (|| -> Res<Option<PathBuf>> {
-            let parent = dst.parent().unwrap_or(to);
-            if !parent.is_dir() {
-                let mut missing = Vec::new();
-                let mut p = parent;
-                while !p.exists() {
-                    missing.push(p.to_path_buf());
-                    p = p.parent().unwrap_or(to);
-                }
-                std::fs::create_dir_all(parent).map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
-                made.extend(missing.into_iter().rev());
-            }
-            vpl_core::image::check_replaceable(dst).map_err(|e| e.to_string())?;
-            let backup = match std::fs::symlink_metadata(dst) {
-                Ok(_) => {
-                    let name = dst.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-                    let b = dst.with_file_name(format!(".{name}.vpl-{pid}.bak"));
-                    std::fs::rename(dst, &b).map_err(|e| format!("cannot write {}: {e}", dst.display()))?;
-                    Some(b)
-                }
-                Err(_) => None,
-            };
-            if let Err(e) = std::fs::rename(src, dst) {
-                if let Some(b) = &backup {
-                    let _ = std::fs::rename(b, dst);
-                }
-                return Err(format!("cannot write {}: {e}", dst.display()));
-            }
-            Ok(backup)
-        })();
-        match step {
-            Ok(backup) => done.push((dst.clone(), backup)),
-            Err(e) => {
-                failure = Some(e);
-                break;
-            }
-        }
+    let mut staging = vpl_core::image::Staging::new();
+    for (src, dst) in moves {
+        staging.adopt(&dst, src).map_err(|e| e.to_string())?;
     }
-    match failure {
-        None => {
-            for (_, b) in done.into_iter().filter_map(|(d, b)| b.map(|b| (d, b))) {
-                let _ = std::fs::remove_file(b);
-            }
-            Ok(())
-        }
-        Some(e) => {
-            for (dst, backup) in done.into_iter().rev() {
-                match backup {
-                    Some(b) => {
-                        let _ = std::fs::rename(b, &dst);
-                    }
-                    None => {
-                        let _ = std::fs::remove_file(&dst);
-                    }
-                }
-            }
-            for d in made.into_iter().rev() {
-                let _ = std::fs::remove_dir(d);
-            }
-            Err(e)
-        }
-    }
+    staging.commit().map_err(|e| e.to_string())
 }
 
 /// The files under `from` (recursively) with their places under `to`.

@@ -117,10 +117,7 @@ pub fn load_gltf_in(path: &Path, camera: Option<&str>, sandbox: &Sandbox) -> Res
             return Err(err(format!("requires the extension {required}, which this reader does not support")));
         }
     }
-    let base = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let base = crate::input::folder_of(path);
     let budget = sandbox.memory_limit().unwrap_or(MAX_MESH_MEMORY).min(MAX_MESH_MEMORY);
     let mut reader =
         Reader { buffers: Vec::new(), textures: HashMap::new(), base, sandbox, path: path.into(), budget, data: GltfData::default() };

@@ -49,10 +49,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData> {
 /// [`load_obj`] reading material libraries only where `sandbox` allows.
 pub fn load_obj_in(path: &Path, sandbox: &Sandbox) -> Result<ObjData> {
     let bytes = input::read_bytes(path, MAX_MESH_BYTES)?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = input::folder_of(path);
     parse_obj(&bytes, path, |name| {
         let found = sandbox.resolve(&dir, name).and_then(|p| input::read_text(&p, MAX_TEXT_BYTES).map(|t| (p, t)));
         match found {

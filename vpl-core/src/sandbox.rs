@@ -47,11 +47,7 @@ impl Sandbox {
     /// The sandbox of the scene file `scene` (which the user named: it may
     /// lie anywhere): its folder and the options' allowed roots.
     pub fn for_scene(scene: &Path, options: &LoadOptions) -> Result<Sandbox> {
-        let folder = match scene.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        Sandbox::for_folder(&folder, options)
+        Sandbox::for_folder(&crate::input::folder_of(scene), options)
     }
 
     /// The sandbox of a scene whose own folder is `folder`.
@@ -62,12 +58,6 @@ impl Sandbox {
             roots.push(c);
         }
         Ok(Sandbox { roots, memory_limit: options.memory_limit })
-    }
-
-    /// A sandbox that lets references reach anywhere (for callers that
-    /// load a file they trust as a whole, such as a test's fixture).
-    pub fn unrestricted() -> Sandbox {
-        Sandbox { roots: vec![PathBuf::from("/")], memory_limit: None }
     }
 
     /// The memory limit of [`LoadOptions::memory_limit`].

@@ -511,14 +511,11 @@ fn memory_line(estimate: &vpl_render::MemoryEstimate) -> String {
 
 /// Fails early, before any work, if `path` cannot be written.
 fn check_writable(path: &Path) -> Res<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = vpl_core::input::folder_of(path);
     if !dir.is_dir() {
         return Err(format!("cannot write {}: directory {} does not exist", path.display(), dir.display()));
     }
-    let md = std::fs::metadata(dir).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let md = std::fs::metadata(&dir).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     if md.permissions().readonly() {
         return Err(format!("cannot write {}: directory {} is read-only", path.display(), dir.display()));
     }

@@ -501,18 +501,14 @@ impl AreaProbes {
         // exactly one cell, and the cells' areas sum to the probes' area
         // (their light to the candidates' light) for any set.
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
-        let (batches, trees) = (&self.batches, &self.trees);
+        let batches = &self.batches;
         let last: Vec<Option<usize>> = open
             .par_iter()
             .map(|&t| {
-                let (b, k) = todo[t];
-                let (batch, q) = (&batches[b], &batches[b][k]);
+                let q = &batches[todo[t].0][todo[t].1];
                 // The cell of its nearest owned neighbour on its surface
                 // keeps its light where the surface is.
-                let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
-                let neighbour = trees[b]
-                    .nearest_accepted(q.p, Some(k), |j| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some())
-                    .and_then(|(j, _)| owned_here(&batch[j]));
+                let neighbour = self.neighbour_owners(live, todo[t], 1).first().copied();
                 neighbour.or_else(|| {
                     let same_side = tree.nearest_accepted(q.p, None, |i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
                     same_side.or_else(|| tree.nearest_accepted(q.p, None, |_| true)).map(|(i, _)| i)
@@ -524,6 +520,23 @@ impl AreaProbes {
         }
         self.write_owners(live, todo, &owner);
         cast
+    }
+
+    /// The owners of the `m` nearest owned probes of probe `(b, k)`'s
+    /// iteration on its own smooth surface, each VPL once, nearest first,
+    /// only VPLs on the probe's side of the surface.
+    fn neighbour_owners(&self, live: &Live, (b, k): (usize, usize), m: usize) -> Vec<usize> {
+        let (batch, q) = (&self.batches[b], &self.batches[b][k]);
+        let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| live.sites[i].n.dot(q.n) > SAME_SIDE_COS);
+        let near =
+            self.trees[b].nearest_accepted_n(q.p, Some(k), |j| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some(), m);
+        let mut owners: Vec<usize> = Vec::with_capacity(near.len());
+        for i in near.into_iter().filter_map(|(j, _)| owned_here(&batch[j])) {
+            if !owners.contains(&i) {
+                owners.push(i);
+            }
+        }
+        owners
     }
 
     /// Records the owners found for `todo` (none: no cell).
@@ -554,28 +567,7 @@ impl AreaProbes {
     ) -> (usize, usize) {
         let sites = live.sites;
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none() && self.batches[todo[t].0][todo[t].1].area > 0.0).collect();
-        let (batches, trees) = (&self.batches, &self.trees);
-        let offers: Vec<Vec<usize>> = open
-            .par_iter()
-            .map(|&t| {
-                let (b, k) = todo[t];
-                let (batch, q) = (&batches[b], &batches[b][k]);
-                let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
-                let near = trees[b].nearest_accepted_n(
-                    q.p,
-                    Some(k),
-                    |j| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some(),
-                    OWNER_TRIES,
-                );
-                let mut offers: Vec<usize> = Vec::with_capacity(near.len());
-                for i in near.into_iter().filter_map(|(j, _)| owned_here(&batch[j])) {
-                    if !offers.contains(&i) {
-                        offers.push(i);
-                    }
-                }
-                offers
-            })
-            .collect();
+        let offers: Vec<Vec<usize>> = open.par_iter().map(|&t| self.neighbour_owners(live, todo[t], OWNER_TRIES)).collect();
         let mut cast = 0;
         for round in 0..OWNER_TRIES {
             let tries: Vec<(usize, usize)> =

@@ -20,6 +20,22 @@ pub fn data_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data")
 }
 
+/// The scene file `file` of the repository's `scenes/` when the model it
+/// names (kept outside the repository, in `../shared/scenes`) is there;
+/// otherwise `None`, after saying which test skips it and why.
+pub fn real_scene(file: &str) -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let path = root.join(file);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap_or_else(|| panic!("{file} names no obj")).trim_matches('"');
+    if root.join(obj).is_file() {
+        Some(path)
+    } else {
+        eprintln!("skipped {file}: {obj} is not there");
+        None
+    }
+}
+
 /// A scratch folder for files a test writes (difference images of failed
 /// comparisons, malformed inputs); kept under `target/` so CI can collect it.
 pub fn scratch_dir(name: &str) -> PathBuf {

@@ -2,7 +2,6 @@
 //! Kollig–Keller bias compensation, which must bring a clamped VPL image back
 //! to the unclamped path tracer. Fixed seeds; each bound says why.
 
-use std::path::Path;
 use vpl_core::image::luminance;
 use vpl_core::{Camera, GeometryClamp, Image, Scene, SceneSetup};
 use vpl_pathtrace::{Footprint, Mode, PathTracer, RenderSettings, render, track_with};
@@ -175,17 +174,9 @@ fn removed_share(scene: &Scene, camera: &Camera, clamp: GeometryClamp, spp: u32)
 /// below 1 % for the estimate to mean anything.
 #[test]
 fn the_default_clamp_removes_at_most_five_percent_everywhere() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let mut specs: Vec<String> = vpl_core::builtin::NAMES.iter().map(|s| s.to_string()).collect();
     for file in ["sponza-dabrovic.toml", "city-munich.toml"] {
-        let path = root.join(file);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap().trim_matches('"');
-        if root.join(obj).is_file() {
-            specs.push(path.to_string_lossy().into_owned());
-        } else {
-            eprintln!("skipped {file}: {obj} is not there");
-        }
+        specs.extend(vpl_tests::real_scene(file).map(|p| p.to_string_lossy().into_owned()));
     }
     for spec in &specs {
         let setup = SceneSetup::load(spec).unwrap();

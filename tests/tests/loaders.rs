@@ -212,15 +212,8 @@ fn sequences_move_camera_and_lights() {
 /// them (`../shared/scenes`); otherwise the test says it skipped.
 #[test]
 fn real_scene_files_load_when_their_models_are_present() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     for (file, triangles) in [("sponza-dabrovic.toml", 60_000), ("city-munich.toml", 30_000), ("city-munich-sky.toml", 30_000)] {
-        let path = root.join(file);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap().trim_matches('"');
-        if !root.join(obj).is_file() {
-            eprintln!("skipped {file}: {obj} is not there");
-            continue;
-        }
+        let Some(path) = vpl_tests::real_scene(file) else { continue };
         let setup = SceneSetup::load(path.to_str().unwrap()).unwrap();
         assert!(setup.scene.geometry.triangles.len() > triangles, "{file}");
         let seq = setup.sequence.as_ref().expect("an animation");

@@ -454,15 +454,8 @@ fn the_centroid_cells_match_path_tracing_on_the_real_scenes() {
     use vpl_pathtrace::{PathTracer, RenderSettings, render};
     use vpl_smc::{FluxEstimator, Placement};
     let lum = |i: &Image| i.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>();
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     for (file, seeds) in [("sponza-dabrovic.toml", 4), ("city-munich.toml", 16)] {
-        let path = root.join(file);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let obj = text.lines().find_map(|l| l.strip_prefix("obj = ")).unwrap().trim_matches('"');
-        if !root.join(obj).is_file() {
-            eprintln!("skipped {file}: {obj} is not there");
-            continue;
-        }
+        let Some(path) = vpl_tests::real_scene(file) else { continue };
         let setup = SceneSetup::load(&path.to_string_lossy()).unwrap();
         let camera = setup.camera.with_resolution((96, 72)).unwrap();
         // Both drawn by their albedo alone, as the VPL pipeline draws them.

@@ -350,8 +350,9 @@ fn forget_temporary(tmp: &Path, remove: bool) {
 }
 
 /// The outputs of one command, written together: each is staged to a
-/// temporary beside its final name ([`Staging::stage`]), and only when all
-/// are staged are they renamed into place ([`Staging::commit`]). A command
+/// temporary beside its final name ([`Staging::stage`]), or is a file the
+/// command wrote into a staging folder of its own ([`Staging::adopt`]), and
+/// only when all are staged are they renamed into place ([`Staging::commit`]). A command
 /// that fails before the commit, or is interrupted, leaves every earlier
 /// file as it was: the staged temporaries are removed (on drop, and by
 /// [`remove_temporaries`] from a signal handler). During the commit, a file

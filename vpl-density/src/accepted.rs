@@ -74,6 +74,64 @@ fn box_dist_sq(q: &[f32; 3], lo: &[f32; 3], hi: &[f32; 3]) -> f32 {
     d
 }
 
+/// Nodes of the tree over `n` points: a leaf holds at most [`LEAF`], a
+/// larger node splits at n / 2 (at least one node).
+fn node_count(n: usize) -> usize {
+    if n <= LEAF { 1 } else { 1 + node_count(n / 2) + node_count(n - n / 2) }
+}
+
+/// Subtrees at least this large build their halves in parallel.
+const PARALLEL_BUILD: usize = 4096;
+
+/// Lays out the subtree over `order` (the points `start..` of the tree's
+/// order, with their indices in the set) into `node` and its descendants into `below`, whose first
+/// element has index `base` in the tree: the children as the pair
+/// `base, base + 1`, then the left child's descendants, then the right's.
+fn build(order: &mut [([f32; 3], u32)], start: usize, node: &mut Node, below: &mut [Node], base: usize) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for (p, _) in order.iter() {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let n = order.len();
+    if n <= LEAF {
+        *node = Node { lo, hi, first: start as u32, count: n as u32 };
+        return;
+    }
+    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
+    let mid = n / 2;
+    order.select_nth_unstable_by(mid, |(p, i), (q, j)| p[axis].total_cmp(&q[axis]).then(i.cmp(j)));
+    *node = Node { lo, hi, first: base as u32, count: 0 };
+    let (pair, rest) = below.split_at_mut(2);
+    let (left_below, right_below) = rest.split_at_mut(node_count(mid) - 1);
+    let (left, right) = pair.split_at_mut(1);
+    let (order_left, order_right) = order.split_at_mut(mid);
+    let (left_base, right_base) = (base + 2, base + 2 + left_below.len());
+    let mut build_left = || build(order_left, start, &mut left[0], left_below, left_base);
+    let mut build_right = || build(order_right, start + mid, &mut right[0], right_below, right_base);
+    if n >= PARALLEL_BUILD {
+        rayon::join(build_left, build_right);
+    } else {
+        build_left();
+        build_right();
+    }
+}
+
+/// Squared distance between the boxes of two nodes (0 where they overlap):
+/// no point of one lies nearer than this to a point of the other.
+#[inline]
+fn box_box_dist_sq(a: &Node, b: &Node) -> f32 {
+    let mut d = 0.0;
+    for x in 0..3 {
+        let e = (a.lo[x] - b.hi[x]).max(b.lo[x] - a.hi[x]).max(0.0);
+        d += e * e;
+    }
+    d
+}
+
 /// A distance with its point's index, ordered by distance and then index.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Ranked(f32, u32);
@@ -93,40 +151,22 @@ impl Ord for Ranked {
 }
 
 impl AcceptTree {
-    /// The tree over `points` (finite, at most u32::MAX of them).
+    /// The tree over `points` (finite, at most u32::MAX of them). The
+    /// halves of a large node are built in parallel; each subtree's nodes
+    /// have their place fixed by its size alone ([`node_count`]), so the
+    /// tree is the same on any number of threads.
     pub(crate) fn new(points: &[[f32; 3]]) -> AcceptTree {
-        let mut order: Vec<u32> = (0..points.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * points.len() / LEAF + 1);
-        nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], first: 0, count: 0 });
-        // (node, start, end) still to lay out.
-        let mut todo = vec![(0usize, 0usize, points.len())];
-        while let Some((at, start, end)) = todo.pop() {
-            let mut lo = [f32::INFINITY; 3];
-            let mut hi = [f32::NEG_INFINITY; 3];
-            for &i in &order[start..end] {
-                for a in 0..3 {
-                    lo[a] = lo[a].min(points[i as usize][a]);
-                    hi[a] = hi[a].max(points[i as usize][a]);
-                }
-            }
-            if end - start <= LEAF {
-                nodes[at] = Node { lo, hi, first: start as u32, count: (end - start) as u32 };
-                continue;
-            }
-            let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
-            let mid = start + (end - start) / 2;
-            order[start..end].select_nth_unstable_by(mid - start, |&i, &j| {
-                points[i as usize][axis].total_cmp(&points[j as usize][axis]).then(i.cmp(&j))
-            });
-            let left = nodes.len();
-            nodes.push(Node { lo, hi, first: 0, count: 0 });
-            nodes.push(Node { lo, hi, first: 0, count: 0 });
-            nodes[at] = Node { lo, hi, first: left as u32, count: 0 };
-            todo.push((left, start, mid));
-            todo.push((left + 1, mid, end));
+        // The points move with their indices, so that the splits compare
+        // coordinates at hand rather than through the indices.
+        let mut items: Vec<([f32; 3], u32)> = points.iter().enumerate().map(|(i, &p)| (p, i as u32)).collect();
+        let empty = Node { lo: [0.0; 3], hi: [0.0; 3], first: 0, count: 0 };
+        let mut nodes = vec![empty; node_count(points.len())];
+        if !points.is_empty() {
+            let (root, below) = nodes.split_at_mut(1);
+            build(&mut items, 0, &mut root[0], below, 1);
         }
-        let tree_points = order.iter().map(|&i| points[i as usize]).collect();
-        AcceptTree { nodes, points: tree_points, index: order }
+        let (tree_points, index) = items.into_iter().unzip();
+        AcceptTree { nodes, points: tree_points, index }
     }
 
     /// Up to `m` points that `accept` takes, other than `skip`, nearest
@@ -158,21 +198,104 @@ impl AcceptTree {
     }
 
     /// The nearest other point of every point of the set, by index in the
-    /// set (ties to the lower index): asked in the tree's order, so that
-    /// consecutive walks meet the same nodes in the cache (in the set's own
-    /// order, which may be random, the walks wait on memory: 3× slower on
-    /// 32K points).
+    /// set (ties to the lower index). One walk per leaf answers for all its
+    /// points at once ([`AcceptTree::leaf_nearest`]): a walk per point
+    /// descends the same path eight times, and on 32K points that was 3×
+    /// slower (in the set's own order, which may be random, a walk per
+    /// point also waits on memory: 3× slower again).
     pub(crate) fn members_nearest(&self) -> Vec<Option<(usize, f32)>> {
         let n = self.points.len();
-        let found: Vec<Option<(usize, f32)>> = self
-            .points
-            .par_iter()
-            .zip(&self.index)
-            .map(|(q, &i)| self.nearest_accepted(q, Some(i as usize), |_| true, 1, n + 1).pop())
-            .collect();
+        let leaves: Vec<usize> = (0..self.nodes.len()).filter(|&i| self.nodes[i].count > 0).collect();
+        let found: Vec<[Ranked; LEAF]> = leaves.par_iter().map(|&l| self.leaf_nearest(l)).collect();
         let mut out = vec![None; n];
-        for (&i, f) in self.index.iter().zip(found) {
-            out[i as usize] = f;
+        for (&l, best) in leaves.iter().zip(found) {
+            let node = self.nodes[l];
+            let (s, e) = (node.first as usize, (node.first + node.count) as usize);
+            for (&i, r) in self.index[s..e].iter().zip(best) {
+                out[i as usize] = (r.1 != u32::MAX).then_some((r.1 as usize, r.0));
+            }
+        }
+        out
+    }
+
+    /// The nearest other point of each point of leaf `l`, in the leaf's
+    /// order: one walk, nearer node first, that skips a node whose box lies
+    /// beyond every point's best so far (the box-to-box distance bounds
+    /// each point's distance to the node's points). A node at exactly that
+    /// distance is still walked: it may hold a tie of lower index.
+    fn leaf_nearest(&self, l: usize) -> [Ranked; LEAF] {
+        let leaf = self.nodes[l];
+        let (s, e) = (leaf.first as usize, (leaf.first + leaf.count) as usize);
+        let (qs, own) = (&self.points[s..e], &self.index[s..e]);
+        let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
+        // The leaf's own points first, so that the walk starts with a bound.
+        let visit = |best: &mut [Ranked; LEAF], ns: usize, ne: usize, node: &Node| {
+            for ((q, &i), b) in qs.iter().zip(own).zip(best.iter_mut()) {
+                if box_dist_sq(q, &node.lo, &node.hi) > b.0 {
+                    continue;
+                }
+                for (p, &j) in self.points[ns..ne].iter().zip(&self.index[ns..ne]) {
+                    let d = dist_sq(p, q);
+                    if (d < b.0 || (d == b.0 && j < b.1)) && i != j {
+                        *b = Ranked(d, j);
+                    }
+                }
+            }
+        };
+        visit(&mut best, s, e, &leaf);
+        let bound = |best: &[Ranked; LEAF]| best[..qs.len()].iter().fold(0.0f32, |m, r| m.max(r.0));
+        let mut stack = [(0u32, 0.0f32); 64];
+        stack[0] = (0, box_box_dist_sq(&leaf, &self.nodes[0]));
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (at, b) = stack[top];
+            if b > bound(&best) {
+                continue;
+            }
+            let node = self.nodes[at as usize];
+            if node.count == 0 {
+                let (cl, cr) = (node.first, node.first + 1);
+                let dl = box_box_dist_sq(&leaf, &self.nodes[cl as usize]);
+                let dr = box_box_dist_sq(&leaf, &self.nodes[cr as usize]);
+                let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
+                stack[top] = far;
+                stack[top + 1] = near;
+                top += 2;
+                continue;
+            }
+            if at as usize != l {
+                visit(&mut best, node.first as usize, (node.first + node.count) as usize, &node);
+            }
+        }
+        best
+    }
+
+    /// Every point within squared distance `r2` of `q` (`r2` not NaN), as
+    /// (index in the set, squared distance), in the tree's order.
+    pub(crate) fn within(&self, q: &[f32; 3], r2: f32) -> Vec<(usize, f32)> {
+        let mut out = Vec::new();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if box_dist_sq(q, &node.lo, &node.hi) > r2 {
+                continue;
+            }
+            if node.count == 0 {
+                stack[top] = node.first + 1;
+                stack[top + 1] = node.first;
+                top += 2;
+                continue;
+            }
+            let (s, e) = (node.first as usize, (node.first + node.count) as usize);
+            for (p, &j) in self.points[s..e].iter().zip(&self.index[s..e]) {
+                let d = dist_sq(p, q);
+                if d <= r2 {
+                    out.push((j as usize, d));
+                }
+            }
         }
         out
     }
@@ -346,6 +469,39 @@ mod tests {
             for (i, f) in found.iter().enumerate() {
                 assert_eq!(*f, brute(&pts, &pts[i], Some(i), |_| true, 1, n).pop(), "n {n} point {i}");
             }
+        }
+        // On a coarse grid: many duplicates and ties, which go to the lower index.
+        let pts: Vec<[f32; 3]> = points(2000, 10).into_iter().map(|p| p.map(|x| (x * 6.0).floor())).collect();
+        let found = AcceptTree::new(&pts).members_nearest();
+        for (i, f) in found.iter().enumerate() {
+            assert_eq!(*f, brute(&pts, &pts[i], Some(i), |_| true, 1, pts.len()).pop(), "grid point {i}");
+        }
+    }
+
+    #[test]
+    fn balls_hold_what_brute_force_finds() {
+        let pts = points(3000, 11);
+        let tree = AcceptTree::new(&pts);
+        for (i, r2) in [(0, 0.0), (5, 0.001), (17, 0.01), (40, 0.2), (99, 4.0)] {
+            let mut found = tree.within(&pts[i], r2);
+            found.sort_by_key(|f| f.0);
+            let brute: Vec<(usize, f32)> =
+                pts.iter().enumerate().map(|(j, p)| (j, dist_sq(p, &pts[i]))).filter(|&(_, d)| d <= r2).collect();
+            assert_eq!(found, brute, "point {i} r² {r2}");
+        }
+    }
+
+    /// The tree is laid out by the sizes alone: built on one thread or on
+    /// several, it is the same.
+    #[test]
+    fn the_tree_is_the_same_on_any_number_of_threads() {
+        let pts = points(20_000, 12);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| AcceptTree::new(&pts));
+        let four = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| AcceptTree::new(&pts));
+        assert_eq!(one.index, four.index);
+        assert_eq!(one.nodes.len(), four.nodes.len());
+        for (a, b) in one.nodes.iter().zip(&four.nodes) {
+            assert_eq!((a.lo, a.hi, a.first, a.count), (b.lo, b.hi, b.first, b.count));
         }
     }
 

@@ -36,7 +36,10 @@ pub fn rendering_k(budget: usize) -> usize {
 /// A point set with a k-d tree over it, answering eq. (7).
 pub struct KnnDensity {
     points: Vec<[f32; 3]>,
-    tree: Option<ImmutableKdTree<f32, 3>>,
+    /// The k-th-neighbour tree (kiddo), built by the first such query: a
+    /// set asked only for nearest accepted points, members' nearest or
+    /// balls (SMC's candidate hits) never builds it.
+    tree: OnceLock<Option<ImmutableKdTree<f32, 3>>>,
     /// The tree of predicate queries, built by the first of them.
     accepted: OnceLock<AcceptTree>,
 }
@@ -54,13 +57,13 @@ impl KnnDensity {
             return Err(DensityError::NonFinite(i));
         }
         let points: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
-        let tree = if points.is_empty() {
-            None
-        } else {
-            // Only fails on an empty slice.
-            ImmutableKdTree::new_from_slice(&points).ok()
-        };
-        Ok(KnnDensity { points, tree, accepted: OnceLock::new() })
+        Ok(KnnDensity { points, tree: OnceLock::new(), accepted: OnceLock::new() })
+    }
+
+    /// The k-th-neighbour tree, `None` for an empty set.
+    fn kd_tree(&self) -> Option<&ImmutableKdTree<f32, 3>> {
+        // Only fails on an empty slice.
+        self.tree.get_or_init(|| if self.points.is_empty() { None } else { ImmutableKdTree::new_from_slice(&self.points).ok() }).as_ref()
     }
 
     /// Number of points N.
@@ -83,7 +86,7 @@ impl KnnDensity {
     }
 
     fn kth(&self, q: &[f32; 3], k: NonZero<usize>) -> f32 {
-        let tree = self.tree.as_ref().expect("a non-empty set has a tree");
+        let tree = self.kd_tree().expect("a non-empty set has a tree");
         if k.get() == 1 {
             return tree.query(q).nearest_one::<SquaredEuclidean<f32>>().execute().distance;
         }
@@ -145,8 +148,10 @@ impl KnnDensity {
     /// Every point of the set within squared distance `r2` of `q`, as
     /// (index, squared distance), in no particular order.
     pub fn within(&self, q: Vec3, r2: f32) -> Vec<(usize, f32)> {
-        let Some(tree) = self.tree.as_ref().filter(|_| r2 >= 0.0) else { return Vec::new() };
-        tree.query(&q.to_array()).within::<SquaredEuclidean<f32>>(r2).execute().iter().map(|f| (f.item as usize, f.distance)).collect()
+        if self.points.is_empty() || r2.is_nan() || r2 < 0.0 {
+            return Vec::new();
+        }
+        self.accepted().within(&q.to_array(), r2)
     }
 
     /// The nearest *other* point of every point of the set, as (index,

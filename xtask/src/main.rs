@@ -1,7 +1,7 @@
 //! `cargo xtask …`: the toolkit's jobs.
 //!
 //! - `cargo xtask reproduce [--quick | --full] [--only LIST] [--scene S,..] [--methods M,..]
-//!   [--frames A..B] [--shard I/N]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
+//!   [--frames A..B] [--shard I/N] [--docs]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
 //!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Figs. 6-8 of the
 //!   progressive renderer (Dammertz et al. 2010, `results/progressive/`), Georgiev's RR experiment,
 //!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
@@ -9,6 +9,8 @@
 //!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
 //!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
 //!   tracing, the figures and Georgiev's experiment stay on the CPU.
+//!   `--docs` then writes `docs/reproduction.md` and its plots from `results/` (module `docs`).
+//! - `cargo xtask docs`: writes `docs/reproduction.md` from `results/` as it is (after a merge).
 //! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
 //! - `cargo xtask test [--cargo-test] [ARGS]`: the whole test suite, as CI runs it: under
 //!   cargo-nextest when it is installed, with the 15 slowest tests and their times, then the
@@ -25,6 +27,7 @@
 //!   speed with debug assertions and overflow checks); prints the
 //!   executions and findings, writes findings to `target/fuzz-findings/`.
 
+mod docs;
 mod test;
 
 use std::path::{Path, PathBuf};
@@ -142,7 +145,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
-     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] [--docs] | docs | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
 
@@ -151,6 +154,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("reproduce") => reproduce(&args[1..]),
         Some("merge") => merge(&args[1..]),
+        Some("docs") if args.len() == 1 => docs::write(&root(), &docs::results(&root())),
         Some("test") => test::test(&args[1..]),
         Some("bench-pt") => bench_pt(&args[1..]),
         Some("bench-vpl") => bench_vpl(&args[1..]),
@@ -360,7 +364,7 @@ fn write_readme(header: &str) -> Result<(), String> {
 
 const README_HEADER: &str = "# Results\n\nWritten by `cargo xtask reproduce` (and `cargo xtask merge` after a sharded run). \
 Each section comes from the newest run of its job; the wall times below are of those runs.\n\n\
-- [Table 1](table1/table1.md): |E| and |E′| of IR, RR, MIR, TCAS and SMC on five stand-in sequences and two on real geometry (Sponza, Munich; where their models are present), three seeds each with 95 % confidence intervals, with Fig. 7 ([`table1/`](table1/))\n\
+- [Table 1](table1/table1.md): |E| and |E′| of IR, RR, MIR, TCAS, SMC and SMC with the paper's kNN flux on five stand-in sequences and two on real geometry (Sponza, Munich; where their models are present), three seeds each with 95 % confidence intervals, with Fig. 7 ([`table1/`](table1/))\n\
 - [Table 2](table2/table2.md): milliseconds per stage of an SMC frame\n\
 - [Figs. 8 and 9](figures/fig8.md): one frame by path tracing and by VPLs; shadow-map resolutions\n\
 - [Fig. 10](figures/fig10.md): error against the VPL budget\n\
@@ -373,6 +377,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     let mut table1_args: Vec<String> = Vec::new();
     let mut shard: Option<String> = None;
     let mut backend = String::from("cpu");
+    let mut write_docs = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -401,6 +406,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
                 table1_args.push(v.clone());
             }
             "--shard" => shard = Some(it.next().ok_or("--shard needs I/N")?.clone()),
+            "--docs" => write_docs = true,
             "--backend" => {
                 let b = it.next().ok_or("--backend needs cpu or gpu")?;
                 if b != "cpu" && b != "gpu" {
@@ -502,7 +508,7 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
         }
         eprintln!(
-            "xtask: [table1] seven sequences (five where the real scenes are absent) x five samplers x three seeds and their ground truth ({} profile{})",
+            "xtask: [table1] seven sequences (five where the real scenes are absent) x six samplers x three seeds and their ground truth ({} profile{})",
             profile.name,
             shard.as_deref().map_or(String::new(), |s| format!(", shard {s}"))
         );
@@ -585,6 +591,13 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     )?;
     write_readme(README_HEADER)?;
     eprintln!("xtask: done in {:.0} s; see results/README.md", start.elapsed().as_secs_f64());
+    if write_docs {
+        if shard.is_some() {
+            eprintln!("xtask: --docs: a sharded run writes docs/reproduction.md with `cargo xtask docs` after `cargo xtask merge`");
+        } else {
+            docs::write(&root(), &results)?;
+        }
+    }
     Ok(())
 }
 

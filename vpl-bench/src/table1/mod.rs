@@ -149,8 +149,15 @@ pub const PROFILE_SEEDS: u32 = 3;
 /// The paper's ground-truth sample count per pixel (§5.2).
 pub const PAPER_TRUTH_SPP: u32 = 692_100;
 
-/// The methods of the table: the paper's four and RR.
-pub const METHODS: [&str; 5] = ["ir", "rr", "mir-resample", "tcas", "smc"];
+/// The methods of the table: the paper's four, RR, and SMC with the paper's
+/// kNN flux (`smc-knn`, eq. 5 and 7) beside the default cell flux.
+pub const METHODS: [&str; 6] = ["ir", "rr", "mir-resample", "tcas", "smc", "smc-knn"];
+
+/// Whether `method` is SMC under another flux or setting (`smc-…`): a
+/// variant of the method the target compares, not one of its rivals.
+pub fn is_smc_variant(method: &str) -> bool {
+    method.starts_with("smc-")
+}
 
 /// Frames of the quick profile's window per row.
 impl Table1Spec {
@@ -804,7 +811,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
                 .methods
                 .iter()
                 .enumerate()
-                .filter(|(i, _)| *i != k)
+                .filter(|(i, m)| *i != k && !is_smc_variant(m))
                 .map(|(i, m)| Comparison { method: m.clone(), smc_minus: draws.differences(&sums[k], &sums[i]) })
                 .collect(),
             None => Vec::new(),

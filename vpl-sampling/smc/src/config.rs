@@ -40,6 +40,9 @@ pub struct SmcConfig {
     pub flux: FluxEstimator,
     /// T: iterations of candidate-ray hits that measure the Voronoi cells.
     pub probe_iterations: usize,
+    /// Area probes kept per VPL and iteration, of the resample ratio's
+    /// hits (all of them when it is at least the ratio).
+    pub probes_per_vpl: usize,
     /// Where in its Voronoi cell a VPL shines from ([`Placement`]).
     pub placement: Placement,
 }
@@ -60,6 +63,7 @@ impl Default for SmcConfig {
             strong_quantile: 0.95,
             flux: FluxEstimator::default(),
             probe_iterations: 16,
+            probes_per_vpl: 16,
             placement: Placement::default(),
         }
     }
@@ -78,16 +82,21 @@ impl SmcConfig {
     }
 
     /// Bytes the sampler keeps beyond its VPLs: the area probes of the
-    /// Voronoi cells, T iterations of I × resample-ratio hits (none for the
-    /// kNN flux at the sites).
+    /// Voronoi cells, T iterations of I × min(probes per VPL, resample
+    /// ratio) hits and the I candidates (none for the kNN flux at the sites).
     pub fn probe_memory(&self) -> u64 {
         if !self.probes() {
             return 0;
         }
         (self.vpls as u64)
-            .saturating_mul(self.resample_ratio as u64)
+            .saturating_mul(self.probes_per_vpl.min(self.resample_ratio) as u64 + 1)
             .saturating_mul(self.probe_iterations as u64)
             .saturating_mul(AreaProbes::BYTES_PER_PROBE)
+    }
+
+    /// Area probes kept per iteration.
+    pub fn probes_per_iteration(&self) -> usize {
+        self.vpls.saturating_mul(self.probes_per_vpl)
     }
 
     /// Checks the settings.
@@ -109,6 +118,9 @@ impl SmcConfig {
         }
         if self.probe_iterations == 0 {
             return Err(SmcError::Invalid("the area probes need at least 1 iteration"));
+        }
+        if self.probes_per_vpl == 0 {
+            return Err(SmcError::Invalid("the area probes need at least 1 probe per VPL"));
         }
         if self.vpls.checked_mul(self.resample_ratio).is_none_or(|n| n > 1 << 28) {
             return Err(SmcError::Invalid("I times the resample ratio must be at most 2^28"));
@@ -148,6 +160,11 @@ impl SmcConfig {
         },
         ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
         ParamKey {
+            key: "probes-per-vpl",
+            default: "16",
+            about: "candidate hits per VPL and iteration kept as area probes (all of them from the resample ratio up)",
+        },
+        ParamKey {
             key: "placement",
             default: "site",
             about: "where a VPL shines from in its Voronoi cell: site (its own point, the paper's) or centroid (the cell's probe nearest its centroid)",
@@ -181,6 +198,7 @@ impl SmcConfig {
             strong_quantile,
             flux: flux_param(p)?,
             probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
+            probes_per_vpl: p.count_or("probes-per-vpl", d.probes_per_vpl, 1)?,
             placement: p.get_or("placement", d.placement)?,
         })
     }

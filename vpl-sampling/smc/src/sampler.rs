@@ -187,7 +187,7 @@ impl SmcSampler {
             next_id: 0,
             iterations: 0,
             lighting: None,
-            probes: AreaProbes::new(config.probe_iterations),
+            probes: AreaProbes::new(config.probe_iterations).with_per_iteration(config.probes_per_iteration()),
             shown: vec![None; config.vpls],
             warming: false,
             collect_probes: true,

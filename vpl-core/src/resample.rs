@@ -9,9 +9,24 @@ use crate::rng::{Purpose, stream};
 /// (seed, iteration, RESAMPLE, d). Non-finite or negative weights count as
 /// zero; when every weight is zero, the elements are drawn uniformly.
 pub fn resample(weights: &[f32], count: usize, max_retries: u32, seed: u64, iteration: u64) -> Vec<usize> {
+    resample_counted(weights, count, max_retries, seed, iteration).0
+}
+
+/// [`resample`] (the same elements, in the same order) and, for each
+/// element taken, how many draws *first* landed on it.
+///
+/// The first landings of the draws, before any retry, are `count`
+/// independent draws with probabilities w_i / Σw, and each lands on an
+/// element that is taken (by that draw or an earlier one). So while the
+/// elements taken are not drawn in proportion to w (a heavy element is
+/// taken once however often it is hit, and the retries move its share to
+/// lighter ones), Σ_i c_i g_i Σw / (count w_i) over the taken elements,
+/// c_i their first landings, is an unbiased estimate of Σ_i g_i over all
+/// elements, for any g (Horvitz–Thompson with replacement).
+pub fn resample_counted(weights: &[f32], count: usize, max_retries: u32, seed: u64, iteration: u64) -> (Vec<usize>, Vec<u32>) {
     let n = weights.len();
     if n == 0 || count == 0 {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
     let clean = |w: f32| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 };
     let mut cdf = Vec::with_capacity(n);
@@ -21,11 +36,13 @@ pub fn resample(weights: &[f32], count: usize, max_retries: u32, seed: u64, iter
         cdf.push(total);
     }
     let uniform = total <= 0.0;
-    let mut taken = vec![false; n];
+    // For each element, its place in `out` once taken.
+    let mut taken = vec![u32::MAX; n];
     let mut out = Vec::with_capacity(count.min(n));
+    let mut first = Vec::with_capacity(count.min(n));
     for d in 0..count.min(n) {
         let mut rng = stream(seed, iteration, Purpose::RESAMPLE, d as u64);
-        for _ in 0..=max_retries {
+        for attempt in 0..=max_retries {
             let i = if uniform {
                 rng.below(n as u32) as usize
             } else {
@@ -33,14 +50,21 @@ pub fn resample(weights: &[f32], count: usize, max_retries: u32, seed: u64, iter
                 let u = ((rng.next_u32() as u64) << 21 ^ (rng.next_u32() as u64 >> 11)) as f64 / (1u64 << 53) as f64 * total;
                 cdf.partition_point(|&c| c <= u).min(n - 1)
             };
-            if !taken[i] {
-                taken[i] = true;
+            let fresh = taken[i] == u32::MAX;
+            if fresh {
+                taken[i] = out.len() as u32;
                 out.push(i);
+                first.push(0);
+            }
+            if attempt == 0 {
+                first[taken[i] as usize] += 1;
+            }
+            if fresh {
                 break;
             }
         }
     }
-    out
+    (out, first)
 }
 
 #[cfg(test)]
@@ -59,6 +83,40 @@ mod tests {
         assert!(got.iter().all(|&i| i == 0 || i == 2 || i == 4));
         assert!(resample(&[], 3, 8, 1, 0).is_empty());
         assert_eq!(resample(&[0.0, 0.0], 2, 64, 1, 0).len(), 2);
+    }
+
+    /// The first landings are draws in proportion to the weights, every
+    /// one on an element taken: they count `count` in all, and the
+    /// Horvitz–Thompson sum Σ c_i g_i Σw / (count w_i) estimates Σ g_i
+    /// without bias where the plain mean of the taken elements does not
+    /// (one heavy element among light ones). Over 4000 seeds, within 5
+    /// standard errors of the seeds' mean.
+    #[test]
+    fn first_landings_give_an_unbiased_sum() {
+        let w: Vec<f32> = (0..40).map(|i| if i == 0 { 40.0 } else { 1.0 }).collect();
+        let g: Vec<f64> = (0..40).map(|i| if i == 0 { 10.0 } else { 1.0 }).collect();
+        let truth: f64 = g.iter().sum();
+        let total: f64 = w.iter().map(|&x| x as f64).sum();
+        let count = 20;
+        let runs = 4000;
+        let (mut ht, mut plain) = (Vec::new(), Vec::new());
+        for seed in 0..runs {
+            let (taken, first) = resample_counted(&w, count, 8, seed, 0);
+            assert_eq!(taken, resample(&w, count, 8, seed, 0));
+            assert_eq!(first.iter().sum::<u32>() as usize, count);
+            ht.push(taken.iter().zip(&first).map(|(&i, &c)| c as f64 * g[i] * total / (count as f64 * w[i] as f64)).sum::<f64>());
+            // The plain mean of the taken elements, times the count of elements.
+            plain.push(taken.iter().map(|&i| g[i]).sum::<f64>() / taken.len() as f64 * 40.0);
+        }
+        let mean_se = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+            (m, (var / v.len() as f64).sqrt())
+        };
+        let (m, se) = mean_se(&ht);
+        assert!((m - truth).abs() < 5.0 * se, "Horvitz–Thompson {m} ± {se} against {truth}");
+        let (p, pse) = mean_se(&plain);
+        assert!((p - truth).abs() > 5.0 * pse, "the plain mean {p} ± {pse} should miss {truth}");
     }
 
     /// The first draw follows the weights: over 20 000 seeds, element i is

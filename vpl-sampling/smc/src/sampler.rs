@@ -1,7 +1,7 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::flux::{AreaProbes, FluxEstimator, Site};
+use crate::flux::{AreaProbes, FluxEstimator, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, resolve};
 use rayon::prelude::*;
@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
-use vpl_core::resample::resample;
+use vpl_core::resample::resample_counted;
 use vpl_core::rng::mix64;
 use vpl_core::scene::LightingKey;
 use vpl_core::{
@@ -111,6 +111,9 @@ pub struct SmcStats {
     pub knn_area_ratio: f32,
     /// Shadow rays that gave probes their cells.
     pub probe_rays: usize,
+    /// The light the candidates of the cells carry, by luminance
+    /// ([`AreaProbes::candidate_light`]; 0 without probes).
+    pub candidate_light: f64,
 }
 
 /// The Sequential Monte Carlo Instant Radiosity sampler (Algorithm 1).
@@ -280,6 +283,13 @@ impl SmcSampler {
         let added = self.fill_slots(candidates, &xs, &mut st);
         tm.candidates_ms += ms(t0);
         self.refresh_radiosities(scene, seed, &added, &mut st, &mut tm);
+        // Each candidate that joined the set counts in its cell with its own
+        // second estimate, not with the one that chose it.
+        for &s in &added {
+            if let Some(p) = self.particles[s] {
+                self.probes.renew(p.id, p.radiance);
+            }
+        }
         let n = self.refresh_densities(scene, &mut tm);
         self.write_fluxes(scene, n, &mut st, &mut tm);
         self.iterations += 1;
@@ -379,7 +389,7 @@ impl SmcSampler {
         };
         tm.knn_ms += ms(t0);
         let t0 = Instant::now();
-        let chosen = resample(&weights, c.vpls, c.max_retries, seed, it);
+        let (chosen, first) = resample_counted(&weights, c.vpls, c.max_retries, seed, it);
         st.candidates = chosen.len();
         tm.resampling_ms = ms(t0);
 
@@ -395,11 +405,40 @@ impl SmcSampler {
         // The hits become area probes, the candidates among them with their radiance.
         if c.probes() && self.collect_probes {
             let t0 = Instant::now();
-            let sampled: Vec<(usize, Vec3)> = chosen.iter().copied().zip(radiances.iter().copied()).collect();
+            // Each candidate's first landings per unit of resampling weight
+            // (first landings alone where every weight is zero and the draws
+            // were uniform): with its hit's area, its weight in its cell's
+            // mean radiance.
+            let uniform = !weights.iter().any(|w| w.is_finite() && *w > 0.0);
+            let sampled: Vec<ProbeCandidate> = chosen
+                .iter()
+                .zip(&first)
+                .zip(&radiances)
+                .enumerate()
+                .map(|(i, ((&h, &c), &l))| ProbeCandidate {
+                    hit: h,
+                    radiance: l,
+                    draws: if uniform { c as f32 } else { c as f32 / weights[h] },
+                    id: first_id + i as u64,
+                })
+                .collect();
             let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
             let shading: Vec<Vec3> = hits.iter().map(|h| h.y.n).collect();
             if let Some(tree) = hit_tree {
-                self.probes.push(&hit_points, &normals, &shading, tree, &nearest, &sampled);
+                // Σw over the draws: with a candidate's first landings over its
+                // weight, its Horvitz–Thompson factor (1 a draw when uniform).
+                let total: f64 = weights.iter().filter(|w| w.is_finite() && **w > 0.0).map(|&w| w as f64).sum();
+                let draws = first.iter().sum::<u32>().max(1) as f64;
+                let scale = if uniform { hit_points.len() as f64 / draws } else { total / draws };
+                self.probes.push(ProbeHits {
+                    hits: &hit_points,
+                    normals: &normals,
+                    shading: &shading,
+                    tree,
+                    nearest: &nearest,
+                    candidates: &sampled,
+                    draw_scale: scale,
+                });
             }
             tm.knn_ms += ms(t0);
         }
@@ -564,6 +603,7 @@ impl SmcSampler {
                 })
                 .collect();
             st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
+            st.candidate_light = self.probes.candidate_light();
             if let Some(cells) = self.probes.cells(&sites) {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
@@ -678,6 +718,7 @@ impl VplSampler for SmcSampler {
             .count("added", s.added)
             .value("intensity_cv", s.intensity_cv as f64)
             .value("knn_area_ratio", s.knn_area_ratio as f64)
+            .value("candidate_light", s.candidate_light)
             .count("probe_rays", s.probe_rays)
             .ms("ms", t.total_ms)
             .ms("candidates_ms", t.candidates_ms)

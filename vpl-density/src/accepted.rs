@@ -219,52 +219,36 @@ impl AcceptTree {
     }
 
     /// The nearest other point of each point of leaf `l`, in the leaf's
-    /// order ([`AcceptTree::group_nearest`], the leaf's own points first so
-    /// that the walk starts with a bound).
+    /// order (ties to the lower index): the leaf's own points first, so that
+    /// the walk starts with a bound, then one walk, nearer node first, that
+    /// skips a node whose box lies beyond every point's best so far (the
+    /// box-to-box distance bounds each point's distance to the node's
+    /// points), and a point whose own distance to a leaf's box exceeds its
+    /// best. A node at exactly that distance is still walked: it may hold a
+    /// tie of lower index.
     fn leaf_nearest(&self, l: usize) -> [Ranked; LEAF] {
         let leaf = self.nodes[l];
         let (s, e) = (leaf.first as usize, (leaf.first + leaf.count) as usize);
-        self.group_nearest(&leaf, &self.points[s..e], &self.index[s..e], |i, j| i != j, Some(l))
-    }
-
-    /// For each query point of a group (at most [`LEAF`], inside the box of
-    /// `group`, each with its key), the nearest point of the set that
-    /// `accept(key, index)` takes (ties to the lower index; (∞, u32::MAX)
-    /// where none is): one walk, nearer node first, that skips a node whose
-    /// box lies beyond every query's best so far (the box-to-box distance
-    /// bounds each query's distance to the node's points), and a query whose
-    /// own distance to a leaf's box exceeds its best. A node at exactly that
-    /// distance is still walked: it may hold a tie of lower index. `first`:
-    /// a leaf to search before the walk (and not again).
-    fn group_nearest(
-        &self,
-        group: &Node,
-        qs: &[[f32; 3]],
-        keys: &[u32],
-        accept: impl Fn(u32, u32) -> bool,
-        first: Option<usize>,
-    ) -> [Ranked; LEAF] {
+        let (qs, own) = (&self.points[s..e], &self.index[s..e]);
         let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
         let visit = |best: &mut [Ranked; LEAF], node: &Node| {
             let (ns, ne) = (node.first as usize, (node.first + node.count) as usize);
-            for ((q, &i), b) in qs.iter().zip(keys).zip(best.iter_mut()) {
+            for ((q, &i), b) in qs.iter().zip(own).zip(best.iter_mut()) {
                 if box_dist_sq(q, &node.lo, &node.hi) > b.0 {
                     continue;
                 }
                 for (p, &j) in self.points[ns..ne].iter().zip(&self.index[ns..ne]) {
                     let d = dist_sq(p, q);
-                    if (d < b.0 || (d == b.0 && j < b.1)) && accept(i, j) {
+                    if (d < b.0 || (d == b.0 && j < b.1)) && i != j {
                         *b = Ranked(d, j);
                     }
                 }
             }
         };
-        if let Some(l) = first {
-            visit(&mut best, &self.nodes[l]);
-        }
+        visit(&mut best, &leaf);
         let bound = |best: &[Ranked; LEAF]| best[..qs.len()].iter().fold(0.0f32, |m, r| m.max(r.0));
         let mut stack = [(0u32, 0.0f32); 64];
-        stack[0] = (0, box_box_dist_sq(group, &self.nodes[0]));
+        stack[0] = (0, box_box_dist_sq(&leaf, &self.nodes[0]));
         let mut top = 1;
         while top > 0 {
             top -= 1;
@@ -275,15 +259,15 @@ impl AcceptTree {
             let node = self.nodes[at as usize];
             if node.count == 0 {
                 let (cl, cr) = (node.first, node.first + 1);
-                let dl = box_box_dist_sq(group, &self.nodes[cl as usize]);
-                let dr = box_box_dist_sq(group, &self.nodes[cr as usize]);
+                let dl = box_box_dist_sq(&leaf, &self.nodes[cl as usize]);
+                let dr = box_box_dist_sq(&leaf, &self.nodes[cr as usize]);
                 let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
                 stack[top] = far;
                 stack[top + 1] = near;
                 top += 2;
                 continue;
             }
-            if first != Some(at as usize) {
+            if at as usize != l {
                 visit(&mut best, &node);
             }
         }

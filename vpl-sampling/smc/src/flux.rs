@@ -1317,6 +1317,36 @@ mod tests {
         areas
     }
 
+    /// Fewer probes than hits: every s-th hit (from an offset that turns
+    /// with the iterations) stands for s times its own area, and the other
+    /// candidates are kept for their radiance alone.
+    #[test]
+    fn fewer_probes_keep_every_s_th_hit_and_every_candidate() {
+        let hits = uniform(40, 3, 0);
+        let up = vec![Vec3::Y; 40];
+        let all = {
+            let tree = KnnDensity::new(&hits).unwrap();
+            surface_neighbour_sq(&tree, &hits, &up, &tree.member_nearest())
+        };
+        let own = std::f32::consts::PI * 39.0 / 40.0;
+        let mut a = AreaProbes::new(2).with_per_iteration(10);
+        for offset in [0, 1] {
+            push(&mut a, &hits, &up, &[(1, Vec3::ONE), (2, Vec3::ONE), (4, Vec3::ONE)]);
+            let batch = a.batches.back().unwrap();
+            let kept: Vec<usize> = (offset..40).step_by(4).collect();
+            let candidates_besides = [1, 2, 4].iter().filter(|&&h| h % 4 != offset).count();
+            assert_eq!(batch.len(), kept.len() + candidates_besides, "offset {offset}");
+            for (q, &h) in batch.iter().zip(&kept) {
+                assert_eq!(q.p, hits[h]);
+                assert!((q.area - 4.0 * own * all[h]).abs() <= 1e-6 * q.area, "hit {h}: {} against 4 × {}", q.area, own * all[h]);
+            }
+            for q in &batch[kept.len()..] {
+                assert!(q.area == 0.0 && q.radiance == Some(Vec3::ONE) && q.owner == Owner::Unassigned);
+            }
+            assert_eq!(batch.iter().filter(|q| q.radiance.is_some()).count(), 3);
+        }
+    }
+
     #[test]
     fn the_oldest_iteration_goes_and_bad_hits_stand_for_nothing() {
         let scene = floor(false);

@@ -9,24 +9,38 @@ use crate::rng::{Purpose, stream};
 /// (seed, iteration, RESAMPLE, d). Non-finite or negative weights count as
 /// zero; when every weight is zero, the elements are drawn uniformly.
 pub fn resample(weights: &[f32], count: usize, max_retries: u32, seed: u64, iteration: u64) -> Vec<usize> {
-    resample_counted(weights, count, max_retries, seed, iteration).0
+    resample_counted(weights, count, max_retries, seed, iteration).taken
 }
 
-/// [`resample`] (the same elements, in the same order) and, for each
-/// element taken, how many draws *first* landed on it.
+/// What [`resample_counted`] took, and how the draws found it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Resampled {
+    /// The elements taken, in draw order ([`resample`]'s answer).
+    pub taken: Vec<usize>,
+    /// For each element taken, how many draws *first* landed on it.
+    pub first: Vec<u32>,
+    /// For each element taken, the probability p_i of one draw landing on
+    /// it: w_i / Σw, or 1 / n where the draws were uniform.
+    pub probability: Vec<f64>,
+    /// The draws made: min(count, n).
+    pub draws: usize,
+}
+
+/// [`resample`] (the same elements, in the same order), with each element's
+/// first landings and draw probability ([`Resampled`]).
 ///
-/// The first landings of the draws, before any retry, are `count`
-/// independent draws with probabilities w_i / Σw, and each lands on an
-/// element that is taken (by that draw or an earlier one). So while the
-/// elements taken are not drawn in proportion to w (a heavy element is
-/// taken once however often it is hit, and the retries move its share to
-/// lighter ones), Σ_i c_i g_i Σw / (count w_i) over the taken elements,
-/// c_i their first landings, is an unbiased estimate of Σ_i g_i over all
-/// elements, for any g (Horvitz–Thompson with replacement).
-pub fn resample_counted(weights: &[f32], count: usize, max_retries: u32, seed: u64, iteration: u64) -> (Vec<usize>, Vec<u32>) {
+/// The first landings of the draws, before any retry, are independent
+/// draws with probabilities p_i, and each lands on an element that is taken
+/// (by that draw or an earlier one). So while the elements taken are not
+/// drawn in proportion to w (a heavy element is taken once however often it
+/// is hit, and the retries move its share to lighter ones),
+/// Σ_i c_i g_i / (draws · p_i) over the taken elements, c_i their first
+/// landings, is an unbiased estimate of Σ_i g_i over all elements, for any
+/// g (Horvitz–Thompson with replacement).
+pub fn resample_counted(weights: &[f32], count: usize, max_retries: u32, seed: u64, iteration: u64) -> Resampled {
     let n = weights.len();
     if n == 0 || count == 0 {
-        return (Vec::new(), Vec::new());
+        return Resampled::default();
     }
     let clean = |w: f32| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 };
     let mut cdf = Vec::with_capacity(n);
@@ -36,11 +50,12 @@ pub fn resample_counted(weights: &[f32], count: usize, max_retries: u32, seed: u
         cdf.push(total);
     }
     let uniform = total <= 0.0;
-    // For each element, its place in `out` once taken.
-    let mut taken = vec![u32::MAX; n];
-    let mut out = Vec::with_capacity(count.min(n));
-    let mut first = Vec::with_capacity(count.min(n));
-    for d in 0..count.min(n) {
+    let draws = count.min(n);
+    // For each element, its place in `taken` once taken.
+    let mut place = vec![u32::MAX; n];
+    let mut r =
+        Resampled { taken: Vec::with_capacity(draws), first: Vec::with_capacity(draws), probability: Vec::with_capacity(draws), draws };
+    for d in 0..draws {
         let mut rng = stream(seed, iteration, Purpose::RESAMPLE, d as u64);
         for attempt in 0..=max_retries {
             let i = if uniform {
@@ -50,21 +65,22 @@ pub fn resample_counted(weights: &[f32], count: usize, max_retries: u32, seed: u
                 let u = ((rng.next_u32() as u64) << 21 ^ (rng.next_u32() as u64 >> 11)) as f64 / (1u64 << 53) as f64 * total;
                 cdf.partition_point(|&c| c <= u).min(n - 1)
             };
-            let fresh = taken[i] == u32::MAX;
+            let fresh = place[i] == u32::MAX;
             if fresh {
-                taken[i] = out.len() as u32;
-                out.push(i);
-                first.push(0);
+                place[i] = r.taken.len() as u32;
+                r.taken.push(i);
+                r.first.push(0);
+                r.probability.push(if uniform { 1.0 / n as f64 } else { clean(weights[i]) / total });
             }
             if attempt == 0 {
-                first[taken[i] as usize] += 1;
+                r.first[place[i] as usize] += 1;
             }
             if fresh {
                 break;
             }
         }
     }
-    (out, first)
+    r
 }
 
 #[cfg(test)]
@@ -101,10 +117,14 @@ mod tests {
         let runs = 4000;
         let (mut ht, mut plain) = (Vec::new(), Vec::new());
         for seed in 0..runs {
-            let (taken, first) = resample_counted(&w, count, 8, seed, 0);
-            assert_eq!(taken, resample(&w, count, 8, seed, 0));
-            assert_eq!(first.iter().sum::<u32>() as usize, count);
-            ht.push(taken.iter().zip(&first).map(|(&i, &c)| c as f64 * g[i] * total / (count as f64 * w[i] as f64)).sum::<f64>());
+            let r = resample_counted(&w, count, 8, seed, 0);
+            let taken = &r.taken;
+            assert_eq!(*taken, resample(&w, count, 8, seed, 0));
+            assert_eq!((r.first.iter().sum::<u32>() as usize, r.draws), (count, count));
+            for (&i, &p) in taken.iter().zip(&r.probability) {
+                assert_eq!(p, w[i] as f64 / total);
+            }
+            ht.push(taken.iter().zip(&r.first).zip(&r.probability).map(|((&i, &c), &p)| c as f64 * g[i] / (count as f64 * p)).sum::<f64>());
             // The plain mean of the taken elements, times the count of elements.
             plain.push(taken.iter().map(|&i| g[i]).sum::<f64>() / taken.len() as f64 * 40.0);
         }

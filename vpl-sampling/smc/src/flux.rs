@@ -84,6 +84,7 @@
 //!   Sponza). Each draw's *first* landing, though, is a draw with
 //!   probability w_h / Σw, and always lands on a candidate; with c_h the
 //!   first landings on candidate h, Σ_h c_h b_h L_h Σw / (draws · w_h)
+//!   (= Σ_h c_h b_h L_h / (draws · p_h))
 //!   estimates ∫ L dA without bias (Horvitz–Thompson with replacement;
 //!   [`vpl_core::resample::resample_counted`]; the light the candidates
 //!   carry, [`AreaProbes::candidate_light`]). A cell's L̄ is the same
@@ -263,8 +264,8 @@ impl Probe {
 }
 
 /// A candidate of one iteration as the probes take it: its hit's index
-/// among the iteration's hits, its radiance, its first landings per unit of
-/// resampling weight ([`vpl_core::resample::resample_counted`]) and its id
+/// among the iteration's hits, its radiance, its first landings over its
+/// draw probability ([`vpl_core::resample::resample_counted`]) and its id
 /// (the VPL's, if it joins the set).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProbeCandidate {
@@ -272,7 +273,8 @@ pub struct ProbeCandidate {
     pub hit: usize,
     /// Its estimated radiance.
     pub radiance: Vec3,
-    /// First landings of the resampling draws on it over its resampling weight.
+    /// First landings of the resampling draws on it over the probability
+    /// of one draw landing on it, c / p.
     pub draws: f32,
     /// Its id.
     pub id: u64,
@@ -294,9 +296,8 @@ pub struct ProbeHits<'a> {
     pub nearest: &'a [Option<(usize, f32)>],
     /// The hits that became candidates.
     pub candidates: &'a [ProbeCandidate],
-    /// Σw over the draws of the resampling (the hits' count over the draws
-    /// when they were uniform): with a candidate's `draws`, its
-    /// Horvitz–Thompson factor.
+    /// One over the draws of the resampling: with a candidate's `draws`,
+    /// its Horvitz–Thompson factor.
     pub draw_scale: f64,
 }
 
@@ -390,7 +391,7 @@ impl<'a> Live<'a> {
 #[derive(Debug, Default)]
 pub struct AreaProbes {
     batches: VecDeque<Vec<Probe>>,
-    /// Per batch, Σw / draws of its resampling: with a candidate's weight,
+    /// Per batch, 1 / draws of its resampling: with a candidate's weight,
     /// the Horvitz–Thompson factor of its radiance ([`AreaProbes::candidate_light`]).
     draw_scales: VecDeque<f64>,
     /// A k-d tree over each batch's probes, for the probes near a VPL that joins.
@@ -547,9 +548,9 @@ impl AreaProbes {
         self.trees.push_back(tree);
     }
 
-    /// The light the candidates carry, Σ_h c_h b_h L_h Σw / (draws w_h)
+    /// The light the candidates carry, Σ_h c_h b_h L_h / (draws p_h)
     /// over the candidates of each iteration held (c_h their first
-    /// landings, w_h their resampling weights), averaged over the
+    /// landings, p_h = w_h / Σw their draw probabilities), averaged over the
     /// iterations: an unbiased estimate of ∫ L dA over the surfaces the
     /// hits reach, whatever the cells (by luminance).
     pub fn candidate_light(&self) -> f64 {
@@ -1052,9 +1053,9 @@ mod tests {
             .collect()
     }
 
-    /// Pushes one iteration whose candidates each had one first landing
-    /// per unit of resampling weight (weight 1: their radiances count by
-    /// their hits' areas alone).
+    /// Pushes one iteration whose candidates each had as many first
+    /// landings as their draw probability (c / p = 1: their radiances count
+    /// by their hits' areas alone).
     fn push(a: &mut AreaProbes, hits: &[Vec3], normals: &[Vec3], candidates: &[(usize, Vec3)]) {
         let weighted: Vec<(usize, Vec3, f32)> = candidates.iter().map(|&(h, l)| (h, l, 1.0)).collect();
         push_weighted(a, hits, normals, &weighted);

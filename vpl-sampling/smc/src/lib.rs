@@ -97,4 +97,4 @@ pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, Site,
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};
 pub use points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, mutually_visible, resolve};
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};
-pub use vpl_core::resample::{resample, resample_counted};
+pub use vpl_core::resample::{Resampled, resample, resample_counted};

@@ -389,7 +389,8 @@ impl SmcSampler {
         };
         tm.knn_ms += ms(t0);
         let t0 = Instant::now();
-        let (chosen, first) = resample_counted(&weights, c.vpls, c.max_retries, seed, it);
+        let drawn = resample_counted(&weights, c.vpls, c.max_retries, seed, it);
+        let chosen = &drawn.taken;
         st.candidates = chosen.len();
         tm.resampling_ms = ms(t0);
 
@@ -405,31 +406,23 @@ impl SmcSampler {
         // The hits become area probes, the candidates among them with their radiance.
         if c.probes() && self.collect_probes {
             let t0 = Instant::now();
-            // Each candidate's first landings per unit of resampling weight
-            // (first landings alone where every weight is zero and the draws
-            // were uniform): with its hit's area, its weight in its cell's
-            // mean radiance.
-            let uniform = !weights.iter().any(|w| w.is_finite() && *w > 0.0);
+            // Each candidate's first landings over its draw probability: with
+            // its hit's area, its weight in its cell's mean radiance.
             let sampled: Vec<ProbeCandidate> = chosen
                 .iter()
-                .zip(&first)
+                .zip(drawn.first.iter().zip(&drawn.probability))
                 .zip(&radiances)
                 .enumerate()
-                .map(|(i, ((&h, &c), &l))| ProbeCandidate {
+                .map(|(i, ((&h, (&c, &p)), &l))| ProbeCandidate {
                     hit: h,
                     radiance: l,
-                    draws: if uniform { c as f32 } else { c as f32 / weights[h] },
+                    draws: (c as f64 / p) as f32,
                     id: first_id + i as u64,
                 })
                 .collect();
             let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
             let shading: Vec<Vec3> = hits.iter().map(|h| h.y.n).collect();
             if let Some(tree) = hit_tree {
-                // Σw over the draws: with a candidate's first landings over its
-                // weight, its Horvitz–Thompson factor (1 a draw when uniform).
-                let total: f64 = weights.iter().filter(|w| w.is_finite() && **w > 0.0).map(|&w| w as f64).sum();
-                let draws = first.iter().sum::<u32>().max(1) as f64;
-                let scale = if uniform { hit_points.len() as f64 / draws } else { total / draws };
                 self.probes.push(ProbeHits {
                     hits: &hit_points,
                     normals: &normals,
@@ -437,7 +430,7 @@ impl SmcSampler {
                     tree,
                     nearest: &nearest,
                     candidates: &sampled,
-                    draw_scale: scale,
+                    draw_scale: 1.0 / drawn.draws.max(1) as f64,
                 });
             }
             tm.knn_ms += ms(t0);

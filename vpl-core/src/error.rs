@@ -147,7 +147,7 @@ pub enum CoreError {
     #[error("bad image: {0}")]
     Image(String),
     /// A named built-in scene does not exist.
-    #[error("unknown built-in scene '{0}' (known: cornell, maze, office, courtyard, atrium, corner, glass)")]
+    #[error("unknown built-in scene '{0}' (known: cornell, maze, office, courtyard, atrium, corner, glass, building, colonnade)")]
     UnknownBuiltin(String),
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]

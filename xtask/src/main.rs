@@ -34,7 +34,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::Instant;
 
-const SCENES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
+const SCENES: [&str; 9] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass", "building", "colonnade"];
 
 /// The real scenes of the gallery: (name, what it is, scene path from the
 /// repository root). Sponza and Munich name models kept outside the

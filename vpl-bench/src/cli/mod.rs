@@ -119,7 +119,7 @@ impl MaterialsArg {
 /// What to render: scene, frame, path tracer settings, threads.
 #[derive(clap::Args)]
 struct SceneArgs {
-    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass), a .toml scene file, an .obj file, a glTF 2.0 file (.gltf, .glb) or a Mitsuba 3 XML scene (.xml).
+    /// A built-in name (cornell, maze, office, courtyard, atrium, corner, glass, building, colonnade), a .toml scene file, an .obj file, a glTF 2.0 file (.gltf, .glb) or a Mitsuba 3 XML scene (.xml).
     #[arg(long)]
     scene: String,
     /// Frame of the scene's sequence.

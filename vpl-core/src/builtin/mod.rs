@@ -9,8 +9,12 @@
 //! | `atrium` | Crytek Sponza (one moving light) | an arcaded court, a light moving through it |
 //! | `corner` | Georgiev & Slusallek's scene | a light around the corner behind the camera |
 //! | `glass` | Dammertz et al.'s box scenes | glass, a mirror, glossy spheres κ = 0 … 0.9 |
+//! | `building` | a storey of rooms | light through one or two doorways, a lamp carried from room to room |
+//! | `colonnade` | a portico on a court | a low sun through a row of columns, a portico lit from the court |
 
 mod atrium;
+mod building;
+mod colonnade;
 mod cornell;
 mod corner;
 mod courtyard;
@@ -26,7 +30,9 @@ use crate::scene_file::{CameraKeySpec, CameraSpec, LightSpec, SequenceSpec};
 use glam::Vec3;
 
 /// Names of the built-in scenes.
-pub const NAMES: [&str; 7] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"];
+/// The first seven stand in for the papers' scenes; the last two are heavy
+/// occlusion of the toolkit's own.
+pub const NAMES: [&str; 9] = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass", "building", "colonnade"];
 
 /// A built-in scene before it becomes a [`crate::Scene`].
 #[derive(Clone, Debug)]
@@ -74,6 +80,8 @@ pub fn build(name: &str) -> Result<Builtin> {
         "atrium" => atrium::build(),
         "corner" => corner::build(),
         "glass" => glass::build(),
+        "building" => building::build(),
+        "colonnade" => colonnade::build(),
         _ => return Err(CoreError::UnknownBuiltin(name.to_string())),
     })
 }

@@ -64,35 +64,33 @@ fn radiosity_integral(scene: &Scene, camera: &Camera, seed: u64) -> f64 {
         .sum()
 }
 
-/// Frames 0 and the middle one of each scene's sequence (frame 0 alone for
-/// a still scene), static: the lights and camera of that frame.
+/// Frames 0, a third and two thirds into each scene's sequence (frame 0
+/// alone for a still scene), static: the lights and camera of that frame.
 fn frames(setup: &SceneSetup) -> Vec<u32> {
     match &setup.sequence {
-        Some(seq) if seq.frame_count() > 1 => vec![0, seq.frame_count() / 2],
+        Some(seq) if seq.frame_count() > 2 => vec![0, seq.frame_count() / 3, 2 * seq.frame_count() / 3],
         _ => vec![0],
     }
 }
 
 /// Σ Φ against the independent estimate on every built-in scene and on the
-/// real scenes of `../shared/scenes` (when their models are there), at two
+/// real scenes of `../shared/scenes` (when their models are there), at three
 /// frames of each sequence. Eight seeds of the sampler (I = 512, the
 /// default warm-up), sixteen batches of the estimate (8192 hits each, four
 /// paths a hit). The light the cells' candidates carry
 /// ([`vpl_smc::SmcStats::candidate_light`]) is printed beside.
 ///
 /// Bound: |z| < 4 for the difference of the two means over their combined
-/// standard error. The 18 comparisons at 4σ would let a correct estimator
-/// fail one of them 0.1 % of the time with known standard errors; these
+/// standard error. The 33 comparisons at 4σ would let a correct estimator
+/// fail one of them 0.2 % of the time with known standard errors; these
 /// are estimated from 8 and 16 samples (their own relative error about
 /// 25 %), which the margin from 3.3σ to 4σ covers. With each candidate's
 /// plain radiance in its cell's mean this failed at 5.3σ (`atrium`, frame
 /// 360: 1.028) and 4.4σ (Sponza, frame 0: 1.037).
 #[test]
 fn the_fluxes_sum_to_the_radiosity_integral() {
-    let mut scenes: Vec<(String, SceneSetup)> = ["cornell", "maze", "office", "courtyard", "atrium", "corner", "glass"]
-        .iter()
-        .map(|n| (n.to_string(), SceneSetup::load(n).unwrap()))
-        .collect();
+    let mut scenes: Vec<(String, SceneSetup)> =
+        vpl_core::builtin::NAMES.iter().map(|n| (n.to_string(), SceneSetup::load(n).unwrap())).collect();
     for file in ["sponza-dabrovic.toml", "city-munich.toml"] {
         if let Some(path) = vpl_tests::real_scene(file) {
             scenes.push((file.to_string(), SceneSetup::load(&path.to_string_lossy()).unwrap()));

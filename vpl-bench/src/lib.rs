@@ -34,6 +34,7 @@
 
 pub mod cli;
 pub mod cpu_time;
+pub mod energy;
 pub mod error;
 pub mod figures;
 pub mod georgiev;

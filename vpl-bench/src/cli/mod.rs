@@ -19,6 +19,7 @@ mod bench_gpu;
 mod bench_pt;
 mod bench_rays;
 mod bench_vpl;
+mod energy;
 mod export_scene;
 mod figures;
 mod georgiev;
@@ -390,6 +391,10 @@ enum Command {
     /// ways of shading the same VPLs; shadow-map resolutions against ray tracing; error against the
     /// VPL budget. fig8.md, fig10.md with images, CSV, JSON and a plot.
     Figures(figures::Args),
+    /// A sampler's unclamped indirect image mean against the path tracer's, at frame 0 and over
+    /// checkpoints of each scene's sequence (the sampler stepped along it), with the share of its
+    /// light the default clamp removes; energy.md and energy.json.
+    Energy(energy::Args),
     /// Merge the unit files of a sharded Table 1 run (all shards done) into its tables and plots.
     Merge(merge::Args),
     /// Figs. 6-8 of the progressive renderer (Dammertz et al. 2010): error against passes on a
@@ -604,6 +609,7 @@ fn dispatch(cli: Cli, registry: &Registry) -> Res<()> {
         Command::BenchGpu(a) => bench_gpu::run(a, registry),
         Command::Table1(a) => table1::run(a, registry),
         Command::Table2(a) => table2::run(a, registry),
+        Command::Energy(a) => energy::run(a, registry),
         Command::Figures(a) => figures::run(a, registry),
         Command::Merge(a) => merge::run(a, registry),
         Command::ProgressiveFigures(a) => progressive_figures::run(a, registry),

@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::write_atomic;
-use vpl_core::{Budget, CoreError, GeometryClamp, Mode, Params};
+use vpl_core::{Budget, CoreError, Mode, Params};
 use vpl_pathtrace::{Footprint, PathTracer, track_with};
 use vpl_sampling::Registry;
 
@@ -153,10 +153,41 @@ pub const PAPER_TRUTH_SPP: u32 = 692_100;
 /// kNN flux (`smc-knn`, eq. 5 and 7) beside the default cell flux.
 pub const METHODS: [&str; 6] = ["ir", "rr", "mir-resample", "tcas", "smc", "smc-knn"];
 
-/// Whether `method` is SMC under another flux or setting (`smc-…`): a
-/// variant of the method the target compares, not one of its rivals.
+/// Whether `method` is SMC under another flux or setting (`smc-…`, or
+/// `smc` with settings): a variant of the method the target compares, not
+/// one of its rivals.
 pub fn is_smc_variant(method: &str) -> bool {
-    method.starts_with("smc-")
+    method.starts_with("smc-") || method.starts_with("smc:")
+}
+
+/// A method of the table: a registry name, then any settings of it, each
+/// after a colon (`smc:flux=knn-calibrated:placement=centroid`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodSpec {
+    /// The registry name.
+    pub sampler: String,
+    /// Its settings, in order.
+    pub settings: Vec<(String, String)>,
+}
+
+impl MethodSpec {
+    /// Parses `method`; a setting without `=` is an error.
+    pub fn parse(method: &str) -> Result<MethodSpec, Table1Error> {
+        let mut parts = method.split(':');
+        let sampler = parts.next().unwrap_or_default().to_string();
+        let settings = parts
+            .map(|kv| match kv.split_once('=') {
+                Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+                _ => Err(Table1Error::Invalid(format!("method '{method}': '{kv}' is not KEY=VALUE"))),
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(MethodSpec { sampler, settings })
+    }
+
+    /// The method's file name in `units/` (colons are not allowed in every file system).
+    pub fn file_stem(method: &str) -> String {
+        method.replace(':', "+")
+    }
 }
 
 /// Frames of the quick profile's window per row.
@@ -205,8 +236,9 @@ impl Table1Spec {
     pub fn validate(&self, registry: &Registry) -> Result<(), Table1Error> {
         self.validate_settings()?;
         for m in &self.methods {
-            if !registry.contains(m) {
-                return Err(Table1Error::Invalid(format!("unknown method '{m}' (methods: {})", registry.names().join(", "))));
+            let spec = MethodSpec::parse(m)?;
+            if !registry.contains(&spec.sampler) {
+                return Err(Table1Error::Invalid(format!("unknown method '{}' (methods: {})", spec.sampler, registry.names().join(", "))));
             }
         }
         Ok(())
@@ -275,7 +307,9 @@ impl Table1Spec {
     /// The file of `unit`, relative to the output folder.
     pub fn unit_file(&self, unit: Unit) -> String {
         match unit {
-            Unit::Method { row, method, seed } => format!("units/{}/{}_seed{seed}.json", self.rows[row].id, self.methods[method]),
+            Unit::Method { row, method, seed } => {
+                format!("units/{}/{}_seed{seed}.json", self.rows[row].id, MethodSpec::file_stem(&self.methods[method]))
+            }
             Unit::Truth { row, frame } => format!("units/{}/truth_{frame:05}.json", self.rows[row].id),
         }
     }
@@ -558,24 +592,29 @@ pub fn run(
 
 /// The renderer every method gets: indirect light only, the paper's depth,
 /// shadow maps, 4×4 interleaved shading with the cross-bilateral filter,
-/// the geometry clamp G_max = I / A_view of the run's first frame, and IR with new paths every frame (the
-/// baseline without temporal coherence).
-pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, clamp: GeometryClamp, seed: u64) -> PipelineSpec {
+/// the geometry clamp G_max = I / A_view of each frame's view (resolved again whenever the camera
+/// moves: [`vpl_render::Clamp::Auto`]), and IR with new paths every frame (the baseline without
+/// temporal coherence).
+pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, seed: u64) -> Result<PipelineSpec, Table1Error> {
+    let method = MethodSpec::parse(method)?;
     let mut params = Params::new();
     params.offer("fresh-paths", true);
-    PipelineSpec {
-        sampler: method.to_string(),
+    for (k, v) in &method.settings {
+        params.insert(k, v.clone()).map_err(|e| Table1Error::Invalid(format!("method '{}': {e}", method.sampler)))?;
+    }
+    Ok(PipelineSpec {
+        sampler: method.sampler,
         params,
         budget: Budget::new(vpls, spec.max_depth),
         visibility: VisibilitySpec::ShadowMaps(spec.shadow_map_res),
         shading: ShadingSpec::Interleaved { filter: true },
-        clamp: vpl_render::Clamp::Value(clamp),
+        clamp: vpl_render::Clamp::Auto,
         compensation: 0,
         mode: Mode::Indirect,
         direct_samples: 1,
         seed,
         backend: spec.backend,
-    }
+    })
 }
 
 fn run_method(
@@ -589,12 +628,8 @@ fn run_method(
 ) -> Result<MethodUnit, Table1Error> {
     let start = Instant::now();
     let setup = row.setup()?;
-    // One clamp per run, from the view of its first frame (GeometryClamp::for_view).
-    let first = setup.camera_at_frame(run.start)?.with_resolution(spec.size)?;
-    let clamp = GeometryClamp::for_view(row.vpls, &setup.scene, &first);
-    let mut renderer = pipeline_spec(spec, method, row.vpls, clamp, seed)
-        .build(registry, &setup.scene)
-        .map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    let mut renderer =
+        pipeline_spec(spec, method, row.vpls, seed)?.build(registry, &setup.scene).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     renderer.backend().check_size(spec.size).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut k = 0u64;
     let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut renderer, &row.pixels(spec.size), None, &mut |_, _| {
@@ -844,4 +879,29 @@ pub fn merge_with_cost(dir: &Path) -> Result<(Table1Results, Option<estimate::Fu
     let (results, runs, cost) = collect(dir)?;
     report::write(dir, &results, &runs, cost.as_ref())?;
     Ok((results, cost))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn methods_take_settings_after_colons() {
+        let m = MethodSpec::parse("smc:flux=knn-calibrated:placement=centroid").unwrap();
+        assert_eq!(m.sampler, "smc");
+        assert_eq!(m.settings, vec![("flux".into(), "knn-calibrated".into()), ("placement".into(), "centroid".into())]);
+        assert_eq!(MethodSpec::parse("ir").unwrap().settings, vec![]);
+        assert!(MethodSpec::parse("smc:flux").is_err() && MethodSpec::parse("smc:=x").is_err());
+        assert_eq!(MethodSpec::file_stem("smc:flux=knn"), "smc+flux=knn");
+        assert!(is_smc_variant("smc:flux=knn") && is_smc_variant("smc-knn") && !is_smc_variant("smc"));
+        assert_eq!(report::display_name("smc:flux=knn:placement=centroid"), "SMC (flux=knn, placement=centroid)");
+        // A setting the sampler does not read is refused when the renderer is built.
+        let spec = Table1Spec::quick();
+        let p = pipeline_spec(&spec, "smc:flux=voronoi-site", 64, 0).unwrap();
+        assert_eq!(p.sampler, "smc");
+        let scene = vpl_core::SceneSetup::load("cornell").unwrap().scene;
+        assert!(p.build(&Registry::builtin(), &scene).is_ok());
+        let bad = pipeline_spec(&spec, "ir:flux=knn", 64, 0).unwrap();
+        assert!(bad.build(&Registry::builtin(), &scene).is_err());
+    }
 }

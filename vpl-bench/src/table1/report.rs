@@ -23,7 +23,11 @@ pub fn display_name(method: &str) -> String {
         "tcas" => "TCAS".into(),
         "smc" => "SMC".into(),
         "smc-knn" => "SMC (kNN flux)".into(),
-        m => m.to_string(),
+        // A registry name with settings: `smc:flux=knn` is "SMC (flux=knn)".
+        m => match m.split_once(':') {
+            Some((name, settings)) => format!("{} ({})", display_name(name), settings.replace(':', ", ")),
+            None => m.to_string(),
+        },
     }
 }
 
@@ -88,7 +92,7 @@ pub fn markdown(r: &Table1Results) -> String {
          point light moving along the nave; `munich`: Munich city blocks under a moving sun; scene files in `scenes/`). Eight tracked pixels per sequence; indirect light only, \
          luminance after Reinhard's operator L/(1+L); ground truth from the path tracer ({} samples per pixel and frame, \
          rays through the pixel centre); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
-         shading, the cross-bilateral filter and the clamp G_max = I / A_view of each run's first frame; no temporal reprojection; max depth {} (three \
+         shading, the cross-bilateral filter and the clamp G_max = I / A_view of each frame's view; no temporal reprojection; max depth {} (three \
          indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
          Profile `{}`, {}×{} pixels, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL); SMC is the toolkit's default \
          (each VPL's flux is its Voronoi cell's light), SMC (kNN flux) the paper's flux (eq. 5 and 7). \

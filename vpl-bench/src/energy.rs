@@ -1,0 +1,333 @@
+//! Energy along a sequence: a sampler's indirect image mean against the
+//! path tracer's, at frame 0 and at checkpoints spread over the scene's
+//! sequence, and the share of its indirect light the default clamp removes.
+//!
+//! The sampler runs the sequence as a renderer would: it is stepped at
+//! every `stride`-th frame from frame 0 (after its own warm-up), keeping
+//! its state, so an estimator that lags behind moving lights (SMC's area
+//! probes live T iterations) is measured with its lag. At frame 0 and at
+//! each checkpoint its VPLs are shaded exhaustively with ray-traced
+//! visibility, once without a clamp and once with G_max = I / A_view of
+//! that frame's view ([`GeometryClamp::for_view`]), and the path tracer
+//! renders the same view's indirect light (depth `max_depth`, materials by
+//! their albedo as the VPL pipeline draws them).
+//!
+//! Per seed the sequence's figure is the mean over the checkpoints of the
+//! per-frame ratios (every frame counts alike, however bright); the seeds
+//! give its standard error.
+
+use std::time::Instant;
+use vpl_core::image::luminance;
+use vpl_core::{Budget, Frame, GeometryClamp, Image, IndirectShader as _, MaterialPolicy, Mode, Params, SceneSetup, VplVisibility as _};
+use vpl_pathtrace::{PathTracer, RenderSettings, render};
+use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
+use vpl_sampling::Registry;
+use vpl_shading::{ExhaustiveShader, render_gbuffer};
+use vpl_visibility::RayTraced;
+
+/// What an energy run measures.
+#[derive(Clone, Debug)]
+pub struct EnergySettings {
+    /// The sampler's registry name.
+    pub sampler: String,
+    /// Its settings (`--set`).
+    pub params: Params,
+    /// The VPL budget I.
+    pub vpls: usize,
+    /// Image size of every render.
+    pub size: (u32, u32),
+    /// Seeds `seed`, `seed + 1`, … of the sampler (the path tracer uses `seed`).
+    pub seeds: u32,
+    /// First seed.
+    pub seed: u64,
+    /// Checkpoints spread over the sequence (the centres of as many equal
+    /// parts); 0: frame 0 alone.
+    pub checkpoints: u32,
+    /// The sampler is stepped at every `stride`-th frame (1: every frame;
+    /// more moves the lights and camera further between its iterations).
+    pub stride: u32,
+    /// Path-traced samples a pixel of the truth.
+    pub truth_spp: u32,
+    /// Longest path in segments.
+    pub max_depth: u32,
+}
+
+impl Default for EnergySettings {
+    fn default() -> Self {
+        EnergySettings {
+            sampler: "smc".into(),
+            params: Params::new(),
+            vpls: 2048,
+            size: (64, 48),
+            seeds: 3,
+            seed: 0,
+            checkpoints: 6,
+            stride: 1,
+            truth_spp: 512,
+            max_depth: 5,
+        }
+    }
+}
+
+/// One rendered frame: the truth and every seed's images.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkpoint {
+    /// Frame index.
+    pub frame: u32,
+    /// The path tracer's indirect image mean (luminance).
+    pub truth: f64,
+    /// Its standard error (from the per-pixel errors, pixels independent).
+    pub truth_se: f64,
+    /// The sampler's unclamped image mean, per seed.
+    pub unclamped: Vec<f64>,
+    /// The same VPLs' image mean under the view's default clamp, per seed.
+    pub clamped: Vec<f64>,
+}
+
+/// A scene's measurements: frame 0 first, then the checkpoints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnergyRun {
+    /// The scene as named.
+    pub scene: String,
+    /// Frame 0, then the checkpoints in order.
+    pub frames: Vec<Checkpoint>,
+    /// Seconds the run took.
+    pub seconds: f64,
+}
+
+/// A mean over seeds and its standard error (0 with one seed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// The mean.
+    pub mean: f64,
+    /// Its standard error.
+    pub se: f64,
+}
+
+impl Estimate {
+    /// The mean and standard error of `xs` (sample variance with n − 1).
+    pub fn of(xs: &[f64]) -> Estimate {
+        let n = xs.len() as f64;
+        if xs.is_empty() {
+            return Estimate { mean: f64::NAN, se: f64::NAN };
+        }
+        let mean = xs.iter().sum::<f64>() / n;
+        let se = if xs.len() < 2 { 0.0 } else { (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt() };
+        Estimate { mean, se }
+    }
+
+    /// Standard errors by which the mean lies more than `tolerance` from
+    /// `target` (negative when inside; infinite when outside with no spread).
+    pub fn z_past(&self, target: f64, tolerance: f64) -> f64 {
+        let d = (self.mean - target).abs() - tolerance;
+        if self.se > 0.0 {
+            d / self.se
+        } else if d > 0.0 {
+            f64::INFINITY
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+}
+
+impl EnergyRun {
+    fn seeds(&self) -> usize {
+        self.frames.first().map_or(0, |f| f.unclamped.len())
+    }
+
+    /// Per seed, the mean of `f(checkpoint, seed)` over `frames`.
+    fn per_seed(&self, frames: &[Checkpoint], f: impl Fn(&Checkpoint, usize) -> f64) -> Vec<f64> {
+        (0..self.seeds()).map(|s| frames.iter().map(|c| f(c, s)).sum::<f64>() / frames.len() as f64).collect()
+    }
+
+    fn sequence(&self) -> &[Checkpoint] {
+        if self.frames.len() > 1 { &self.frames[1..] } else { &self.frames }
+    }
+
+    /// The unclamped image mean over the truth's at frame 0, over seeds.
+    pub fn frame0_ratio(&self) -> Estimate {
+        Estimate::of(&self.per_seed(&self.frames[..1], |c, s| c.unclamped[s] / c.truth))
+    }
+
+    /// The mean over the checkpoints of that ratio, over seeds.
+    pub fn sequence_ratio(&self) -> Estimate {
+        Estimate::of(&self.per_seed(self.sequence(), |c, s| c.unclamped[s] / c.truth))
+    }
+
+    /// The share of the indirect light the clamp removes, mean over the
+    /// checkpoints, over seeds.
+    pub fn clamp_removed(&self) -> Estimate {
+        Estimate::of(&self.per_seed(self.sequence(), |c, s| 1.0 - c.clamped[s] / c.unclamped[s]))
+    }
+
+    /// The largest relative standard error of the truth over the frames.
+    pub fn truth_rel_se(&self) -> f64 {
+        self.frames.iter().map(|c| c.truth_se / c.truth).fold(0.0, f64::max)
+    }
+}
+
+/// Errors of an energy run.
+#[derive(Debug, thiserror::Error)]
+pub enum EnergyError {
+    /// The scene or a frame of it.
+    #[error(transparent)]
+    Core(#[from] vpl_core::CoreError),
+    /// The sampler or renderer.
+    #[error(transparent)]
+    Render(#[from] vpl_render::RenderError),
+    /// The path tracer.
+    #[error(transparent)]
+    Path(#[from] vpl_pathtrace::RenderError),
+    /// A setting.
+    #[error("{0}")]
+    Invalid(String),
+    /// The truth is black at a frame, so no ratio exists.
+    #[error("{scene}: the path tracer's indirect light is black at frame {frame}")]
+    Black {
+        /// The scene.
+        scene: String,
+        /// The frame.
+        frame: u32,
+    },
+}
+
+/// The frames [`measure`] renders for a sequence of `count` frames: 0, then
+/// the centres of `checkpoints` equal parts, on the stride.
+pub fn checkpoint_frames(count: u32, checkpoints: u32, stride: u32) -> Vec<u32> {
+    let stride = stride.max(1);
+    let mut frames = vec![0];
+    for k in 0..checkpoints {
+        let f = ((2 * k + 1) as u64 * count as u64 / (2 * checkpoints as u64)) as u32;
+        frames.push(f / stride * stride);
+    }
+    frames
+}
+
+fn mean_luminance(img: &Image) -> f64 {
+    img.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.data.len().max(1) as f64
+}
+
+/// Measures `spec` (a built-in name or scene file, loaded by the caller
+/// as `setup`) under `s`; `progress` hears each finished (seed, frame).
+pub fn measure(
+    registry: &Registry,
+    scene_name: &str,
+    setup: &SceneSetup,
+    s: &EnergySettings,
+    progress: &mut dyn FnMut(&str),
+) -> Result<EnergyRun, EnergyError> {
+    if s.seeds == 0 || s.vpls == 0 || s.truth_spp == 0 {
+        return Err(EnergyError::Invalid("seeds, VPLs and samples must be at least 1".into()));
+    }
+    let start = Instant::now();
+    let count = setup.sequence.as_ref().map_or(1, |q| q.frame_count());
+    let frames = checkpoint_frames(count, if count > 1 { s.checkpoints } else { 0 }, s.stride);
+    let stride = s.stride.max(1);
+    let last = *frames.iter().max().unwrap_or(&0);
+    // The truth at every rendered frame.
+    let mut out: Vec<Checkpoint> = Vec::with_capacity(frames.len());
+    for &f in &frames {
+        let (scene, camera) = setup.frame(f)?;
+        let scene = scene.with_material_policy(MaterialPolicy::Diffuse);
+        let camera = camera.with_resolution(s.size)?;
+        let pt = render(
+            &scene,
+            &camera,
+            &PathTracer::new(s.max_depth, Mode::Indirect),
+            RenderSettings { spp: s.truth_spp, seed: s.seed, frame: f as u64 },
+            &|_, _| {},
+        )?;
+        let truth = mean_luminance(&pt.image);
+        let n = pt.stderr.data.len().max(1) as f64;
+        let truth_se = pt.stderr.data.iter().map(|&c| (luminance(c) as f64).powi(2)).sum::<f64>().sqrt() / n;
+        if truth.is_nan() || truth <= 0.0 {
+            return Err(EnergyError::Black { scene: scene_name.into(), frame: f });
+        }
+        out.push(Checkpoint { frame: f, truth, truth_se, unclamped: Vec::new(), clamped: Vec::new() });
+        progress(&format!("truth of frame {f}"));
+    }
+    for k in 0..s.seeds {
+        let seed = s.seed + k as u64;
+        let mut renderer = Renderer::builder(&setup.scene)
+            .registry(registry)
+            .sampler(s.sampler.as_str())
+            .params(s.params.clone())
+            .budget(Budget { vpls: s.vpls, max_depth: s.max_depth })
+            .seed(seed)
+            .visibility(VisibilitySpec::RayTraced)
+            .shader(ShadingSpec::Exhaustive)
+            .clamp(Clamp::Off)
+            .mode(Mode::Indirect)
+            .build()?;
+        let mut f = 0;
+        while f <= last {
+            let (scene, camera) = setup.frame(f)?;
+            let camera = camera.with_resolution(s.size)?;
+            let gbuffer = render_gbuffer(&scene, &camera);
+            let time = setup.sequence.as_ref().map_or(0.0, |q| q.time(f));
+            let frame = Frame { scene: &scene, camera: &camera, time, index: f as u64, seed, gbuffer: &gbuffer, previous: None };
+            let set = renderer.sampler_mut().next_frame(&frame).clone();
+            for c in out.iter_mut().filter(|c| c.frame == f) {
+                let mut vis = RayTraced::default();
+                vis.update(&scene, &set);
+                let unclamped = ExhaustiveShader { clamp: None }.shade(&gbuffer, &set, &vis);
+                let clamp = GeometryClamp::for_view(s.vpls, &scene, &camera);
+                let clamped = ExhaustiveShader { clamp: Some(clamp) }.shade(&gbuffer, &set, &vis);
+                c.unclamped.push(mean_luminance(&unclamped));
+                c.clamped.push(mean_luminance(&clamped));
+                progress(&format!("seed {seed}, frame {f}"));
+            }
+            f += stride;
+        }
+    }
+    Ok(EnergyRun { scene: scene_name.into(), frames: out, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// A Markdown table of `runs`: the frame-0 and sequence ratios and the
+/// clamp's removed share, each ± its standard error over seeds.
+pub fn markdown(runs: &[EnergyRun], s: &EnergySettings) -> String {
+    let mut md = format!(
+        "{} with I = {}, {}×{}, {} seeds, stepped every {} frame(s), {} checkpoints; path tracer {} spp, depth {}; unclamped, ray-traced, exhaustive, indirect only.\n\n",
+        s.sampler, s.vpls, s.size.0, s.size.1, s.seeds, s.stride, s.checkpoints, s.truth_spp, s.max_depth
+    );
+    md.push_str(
+        "| scene | frame 0: image mean / path tracer | sequence mean | clamp removes (sequence) | truth's largest rel. SE | seconds |\n",
+    );
+    md.push_str("| --- | ---: | ---: | ---: | ---: | ---: |\n");
+    for r in runs {
+        let (a, b, c) = (r.frame0_ratio(), r.sequence_ratio(), r.clamp_removed());
+        md.push_str(&format!(
+            "| {} | {:.3} ± {:.3} | {:.3} ± {:.3} | {:.1} % ± {:.1} | {:.1} % | {:.0} |\n",
+            r.scene,
+            a.mean,
+            a.se,
+            b.mean,
+            b.se,
+            100.0 * c.mean,
+            100.0 * c.se,
+            100.0 * r.truth_rel_se(),
+            r.seconds
+        ));
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkpoints_sit_at_the_centres_of_equal_parts_on_the_stride() {
+        assert_eq!(checkpoint_frames(720, 4, 1), vec![0, 90, 270, 450, 630]);
+        assert_eq!(checkpoint_frames(720, 4, 4), vec![0, 88, 268, 448, 628]);
+        assert_eq!(checkpoint_frames(1, 0, 1), vec![0]);
+    }
+
+    #[test]
+    fn estimates_and_their_distance_past_a_tolerance() {
+        let e = Estimate::of(&[1.0, 1.02, 1.04]);
+        assert!((e.mean - 1.02).abs() < 1e-12 && (e.se - 0.02 / 3f64.sqrt()).abs() < 1e-12);
+        assert!(e.z_past(1.0, 0.03) < 0.0);
+        assert!((Estimate::of(&[1.1, 1.1]).z_past(1.0, 0.03)).is_infinite());
+    }
+}

@@ -126,7 +126,7 @@ fn real_scene_gallery(vpl: &Path, dir: &Path, profile: &Profile) -> Result<Strin
     md.push('\n');
     Ok(md)
 }
-const JOBS: [&str; 9] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "fig8", "fig10", "progressive"];
+const JOBS: [&str; 10] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "energy", "fig8", "fig10", "progressive"];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -144,7 +144,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,fig8,fig9,fig10,progressive] \
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,energy,fig8,fig9,fig10,progressive] \
      [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] [--docs] | docs | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
@@ -237,6 +237,8 @@ struct Profile {
     georgiev_spp: u32,
     georgiev_frames: u32,
     table2: (&'static str, u32),
+    /// `vpl energy`: checkpoints a sequence and the stride of the sampler's steps.
+    energy: (u32, u32),
     figures: &'static [&'static str],
     progressive: &'static [&'static str],
 }
@@ -249,6 +251,7 @@ const QUICK: Profile = Profile {
     georgiev_spp: 2048,
     georgiev_frames: 8,
     table2: ("640x360", 10),
+    energy: (3, 8),
     figures: &[
         "--scenes",
         "office",
@@ -291,6 +294,7 @@ const FULL: Profile = Profile {
     georgiev_spp: 16384,
     georgiev_frames: 32,
     table2: ("1920x1080", 30),
+    energy: (8, 1),
     figures: &[
         "--scenes",
         "office,atrium",
@@ -546,6 +550,28 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             text.trim_start_matches("# Table 2: milliseconds per stage of an SMC frame\n\n").replace("## ", "### ")
         );
         save_section("table2", &md, Some(t.elapsed().as_secs_f64()))?;
+    }
+    if job("energy") {
+        let t = Instant::now();
+        let (checkpoints, stride) = profile.energy;
+        // Every built-in, Table 1's moving sun, and its real scenes (skipped where absent).
+        let mut scenes: Vec<String> = SCENES.iter().map(|s| s.to_string()).collect();
+        scenes.extend(["courtyard-sun", "sponza", "munich"].map(String::from));
+        eprintln!("xtask: [energy] SMC's image mean against path tracing on {} scenes, 3 seeds", scenes.len());
+        let dir = results.join("energy");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root())
+            .args(["energy", "--scene", &scenes.join(","), "--checkpoints", &checkpoints.to_string(), "--stride", &stride.to_string()])
+            .arg("--out")
+            .arg(&dir);
+        run(c, "vpl energy")?;
+        let text = std::fs::read_to_string(dir.join("energy.md")).map_err(|e| e.to_string())?;
+        let md = format!(
+            "## SMC's energy along the sequences (`energy/`)\n\nThe default SMC's unclamped indirect image mean over the path tracer's, at frame 0 and over \
+             checkpoints of each sequence (the sampler stepped along it from frame 0), and the share of its light the default clamp \
+             (G_max = I / A_view of each view) removes; means over seeds ± their standard errors.\n\n{text}\n"
+        );
+        save_section("energy", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     for (name, fig) in [("fig8", "8"), ("fig10", "10")] {
         if !job(name) {

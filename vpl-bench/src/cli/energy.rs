@@ -83,17 +83,23 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     }
     let settings = EnergySettings { sampler, params, vpls, size: (w, h), seeds, seed, checkpoints, stride, truth_spp: spp, max_depth };
     let options = vpl_core::LoadOptions { allow_outside, ..Default::default() };
-    let setups = scenes
-        .iter()
-        .map(|s| match crate::table1::rows::row(s) {
-            Some(row) => row.setup().map_err(|e| e.to_string()),
-            None => SceneSetup::load_with(s, &options).map_err(|e| e.to_string()),
-        })
-        .collect::<Res<Vec<_>>>()?;
+    // A Table 1 sequence on real geometry whose model is not here is skipped, and said so.
+    let mut skipped = Vec::new();
+    let mut setups = Vec::new();
+    for s in &scenes {
+        match crate::table1::rows::row(s) {
+            Some(row) => match row.missing() {
+                Some(why) => skipped.push(format!("{s}: {why}")),
+                None => setups.push((s.clone(), row.setup().map_err(|e| e.to_string())?)),
+            },
+            None => setups.push((s.clone(), SceneSetup::load_with(s, &options).map_err(|e| e.to_string())?)),
+        }
+    }
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
     let mut runs = Vec::new();
-    for (name, setup) in scenes.iter().zip(&setups) {
+    for (name, setup) in &setups {
+        let name = name.as_str();
         eprintln!("vpl: energy: {name}");
         // Params marks the keys it was asked for, so each scene takes its own copy.
         let settings = settings.clone();
@@ -113,7 +119,11 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         );
         runs.push(run);
     }
-    let md = markdown(&runs, &settings);
+    let mut md = markdown(&runs, &settings);
+    for why in &skipped {
+        eprintln!("vpl: energy: skipped {why}");
+        md.push_str(&format!("\nSkipped {why}\n"));
+    }
     let json = serde_json::json!({
         "sampler": settings.sampler,
         "set": set,

@@ -35,9 +35,14 @@ pub(super) struct Args {
     /// Checkpoints spread over each sequence.
     #[arg(long, default_value_t = 6)]
     checkpoints: u32,
-    /// Step the sampler at every N-th frame (1: every frame, as a renderer does).
+    /// Step the sampler at every N-th frame (1: every frame, as a renderer does) and at each of
+    /// the --settle frames before a checkpoint.
     #[arg(long, default_value_t = 1)]
     stride: u32,
+    /// Frames stepped one by one before each checkpoint when --stride is above 1 (32 = 2T lets
+    /// the area probes come from consecutive frames).
+    #[arg(long, default_value_t = 32)]
+    settle: u32,
     /// Path-traced samples a pixel of the truth.
     #[arg(long, default_value_t = 512)]
     spp: u32,
@@ -67,6 +72,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         seed,
         checkpoints,
         stride,
+        settle,
         spp,
         max_depth,
         allow_outside,
@@ -81,7 +87,8 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         let (k, value) = item.split_once('=').ok_or_else(|| format!("--set {item}: expected KEY=VALUE"))?;
         params.insert(k, value).map_err(|e| format!("--set {e}"))?;
     }
-    let settings = EnergySettings { sampler, params, vpls, size: (w, h), seeds, seed, checkpoints, stride, truth_spp: spp, max_depth };
+    let settings =
+        EnergySettings { sampler, params, vpls, size: (w, h), seeds, seed, checkpoints, stride, settle, truth_spp: spp, max_depth };
     let options = vpl_core::LoadOptions { allow_outside, ..Default::default() };
     // A Table 1 sequence on real geometry whose model is not here is skipped, and said so.
     let mut skipped = Vec::new();
@@ -132,6 +139,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         "seeds": seeds,
         "seed": seed,
         "stride": stride,
+        "settle": settle,
         "spp": spp,
         "max_depth": max_depth,
         "scenes": runs.iter().map(|r| serde_json::json!({

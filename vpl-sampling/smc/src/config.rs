@@ -1,6 +1,6 @@
 //! Settings of the SMC sampler, with the paper's defaults.
 
-use crate::flux::{AreaProbes, FluxEstimator, flux_param};
+use crate::flux::{AreaProbes, FluxEstimator, ProbeWindow, flux_param};
 use crate::placement::Placement;
 use vpl_core::{Budget, ParamError, ParamKey, Params};
 use vpl_density::rendering_k;
@@ -43,6 +43,8 @@ pub struct SmcConfig {
     /// Area probes kept per VPL and iteration, of the resample ratio's
     /// hits (all of them when it is at least the ratio).
     pub probes_per_vpl: usize,
+    /// How the T iterations of probes are weighted ([`ProbeWindow`]).
+    pub probe_window: ProbeWindow,
     /// Where in its Voronoi cell a VPL shines from ([`Placement`]).
     pub placement: Placement,
 }
@@ -63,7 +65,8 @@ impl Default for SmcConfig {
             strong_quantile: 0.95,
             flux: FluxEstimator::default(),
             probe_iterations: 16,
-            probes_per_vpl: 16,
+            probes_per_vpl: 4,
+            probe_window: ProbeWindow::default(),
             placement: Placement::default(),
         }
     }
@@ -161,8 +164,13 @@ impl SmcConfig {
         ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
         ParamKey {
             key: "probes-per-vpl",
-            default: "16",
+            default: "4",
             about: "candidate hits per VPL and iteration kept as area probes (all of them from the resample ratio up)",
+        },
+        ParamKey {
+            key: "probe-window",
+            default: "triangle",
+            about: "weights of the T iterations of probes: triangle (rising and falling, a cell changes smoothly) or box (all alike)",
         },
         ParamKey {
             key: "placement",
@@ -199,6 +207,7 @@ impl SmcConfig {
             flux: flux_param(p)?,
             probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
             probes_per_vpl: p.count_or("probes-per-vpl", d.probes_per_vpl, 1)?,
+            probe_window: p.get_or("probe-window", d.probe_window)?,
             placement: p.get_or("placement", d.placement)?,
         })
     }

@@ -61,15 +61,20 @@
 //!   N − 1 Poisson points, (N − 1) p_h π r_1² is Exp(1)-distributed. k = 1
 //!   keeps r_1, and the error where p_h changes or the surface ends within
 //!   it, as small as the hits allow. |V_i| sums b over the cell's probes and
-//!   averages over the T iterations, so each cell is measured by about
-//!   16·T hits. Fewer probes per VPL (`probes-per-vpl` below the resample
-//!   ratio) keep every s-th hit, each standing for s b (the hits come in
-//!   the random order of their camera points, so the sum stays unbiased),
-//!   and the candidates among the others for their radiance alone: 4 a VPL
-//!   cut the cells' cost on `office` (I = 2048, 2 cores) from 25 to 8 ms a
-//!   frame, but the cells' noisier areas made a static view's image change
-//!   by 1.04 % a frame, past SMC's 1 % (`tests/tests/smc.rs`; every hit:
-//!   0.75 %). Pooling instead groups of 4 near hits on one surface into one
+//!   takes a weighted mean over the T iterations ([`ProbeWindow`]: by
+//!   default a triangle, 1, 2, …, 2, 1, so that each iteration comes in and
+//!   goes out gradually; the weights sum to 1, so the sum stays unbiased
+//!   and the cells still partition it). With every hit kept each cell is
+//!   measured by about 16·T hits. Fewer probes per VPL (`probes-per-vpl`
+//!   below the resample ratio; 4 by default) keep every s-th hit, each
+//!   standing for s b (the hits come in the random order of their camera
+//!   points, so the sum stays unbiased), and the candidates among the
+//!   others for their radiance alone. 4 a VPL cut the cells' cost on
+//!   `office` (I = 2048, 2 cores) from 25 to 8 ms a frame; with equal
+//!   weights the noisier areas made a static view's image change by 0.87 %
+//!   a frame (every hit: 0.61 %; `cornell`, 1024 VPLs, 20 frame pairs),
+//!   near SMC's 1 %, and the triangle takes it to 0.68 % (every hit:
+//!   0.53 %). Pooling instead groups of 4 near hits on one surface into one
 //!   probe standing for their summed b (exact total area, 0.80 % a frame)
 //!   brightened the images: `atrium` 1.030 and the Munich blocks 1.141 of
 //!   path tracing against 1.025 and 1.038, as a group's whole area follows
@@ -96,8 +101,17 @@
 //!   runs high. A cell no weighted candidate fell in takes their plain
 //!   mean, and one no candidate fell in the VPL's own radiance. The
 //!   candidates keep the radiance of the lighting they were estimated in:
-//!   under moving lights L̄ lags by T/2 iterations on average (the VPL's own
-//!   radiance is estimated anew at once, as the paper does). Σ Φ then
+//!   under moving lights L̄ lags by T/2 iterations on average, while the
+//!   VPL's own radiance is estimated anew at once, as the paper does, with
+//!   the same random numbers each frame. So the cell's mean is brought
+//!   forward by its VPL's own change over the same iterations and weights,
+//!   L̄ · Y_i(now) / Ȳ_i(then) ([`Cell::current_radiance`]; the records are
+//!   equal under lights that do not move, and it is L̄ itself). On
+//!   `building`, whose lamp is carried from room to room, this took the
+//!   checkpoints of the sequence from 1.07, 1.20 and 0.90 of path tracing
+//!   to 1.00, 1.17 and 1.04 (one seed): a VPL that joined within the
+//!   window has no record of the iterations before it, and keeps their lag.
+//!   Σ Φ then
 //!   equals the candidates' light and an independent estimate of ∫ L dA
 //!   within their standard errors on every built-in scene and both real
 //!   ones (`tests/tests/smc_flux.rs`); with the plain mean it was 2.8 %
@@ -197,6 +211,29 @@ impl FromParam for FluxEstimator {
 }
 
 impl std::fmt::Display for FluxEstimator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl ProbeWindow {
+    /// The parameter value naming the window.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProbeWindow::Box => "box",
+            ProbeWindow::Triangle => "triangle",
+        }
+    }
+}
+
+impl FromParam for ProbeWindow {
+    const EXPECTED: &'static str = "box or triangle";
+    fn from_param(text: &str) -> Option<Self> {
+        [ProbeWindow::Box, ProbeWindow::Triangle].into_iter().find(|w| w.name() == text.trim())
+    }
+}
+
+impl std::fmt::Display for ProbeWindow {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
     }
@@ -304,7 +341,7 @@ pub struct ProbeHits<'a> {
 /// A Voronoi cell as the probes measured it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Cell {
-    /// Area, m²: the probes' areas averaged over the iterations held.
+    /// Area, m²: the probes' areas, a weighted mean over the iterations held ([`ProbeWindow`]).
     pub area: f64,
     /// Centroid of the part of the cell on the site's own smooth surface
     /// (probes whose normals lie within 60° of the site's): their positions
@@ -319,9 +356,44 @@ pub struct Cell {
     pub weighted_radiance: Vec3,
     /// Σ w over the candidates in the cell.
     pub radiance_weight: f32,
+    /// Σ w Y_i(t) over the candidates in the cell: the luminance Y_i of the
+    /// cell's VPL as recorded with each candidate's iteration t (its
+    /// luminance now where that iteration has no record of it).
+    pub history_luminance: f32,
+    /// Σ w over the candidates that count in `history_luminance`.
+    pub history_weight: f32,
+    /// The luminance of the cell's VPL under the newest iteration's lights,
+    /// if recorded ([`AreaProbes::record`]).
+    pub luminance_now: Option<f32>,
 }
 
 impl Cell {
+    /// [`Cell::mean_radiance`] brought forward to the lights of the newest
+    /// iteration: the candidates' radiances were estimated over the last T
+    /// iterations, under lights that may since have moved, so the mean is
+    /// scaled by how the cell's own VPL changed over the same iterations
+    /// and weights,
+    ///
+    /// ```text
+    /// L̄_now(V_i) = L̄(V_i) · Y_i(now) / (Σ_h w_h Y_i(t_h) / Σ_h w_h),
+    /// ```
+    ///
+    /// Y_i(t) the VPL's luminance under iteration t's lights (a ratio
+    /// estimate; the sampler estimates Y_i with the same random numbers at
+    /// every frame, so their noise cancels in the ratio). Under lights that
+    /// do not move the records are equal and this is the mean itself; the
+    /// mean is kept where the VPL's past luminance is zero.
+    pub fn current_radiance(&self, fallback: Vec3) -> Vec3 {
+        let mean = self.mean_radiance(fallback);
+        match self.luminance_now {
+            Some(now) if self.history_weight > 0.0 && self.history_luminance > 0.0 && now.is_finite() => {
+                let factor = now * self.history_weight / self.history_luminance;
+                if factor.is_finite() { mean * factor } else { mean }
+            }
+            _ => mean,
+        }
+    }
+
     /// The cell's mean radiance over area: the candidates' radiances
     /// weighted by their hits' areas over their shares of the draws (a
     /// ratio estimate; see the module text), their plain mean where none
@@ -405,6 +477,34 @@ pub struct AreaProbes {
     pushed: usize,
     /// The candidates of the newest iteration: (id, probe), by id.
     newest: Vec<(u64, u32)>,
+    /// How the iterations held are weighted ([`ProbeWindow`]).
+    window: ProbeWindow,
+    /// Per iteration held, the luminance of each slot's VPL as the sampler
+    /// estimated it under that iteration's lights, by slot (with its id):
+    /// what [`Cell::current_radiance`] brings the cells' radiances forward with.
+    records: VecDeque<Option<Record>>,
+}
+
+/// The luminance of each slot's VPL (with its id) under one iteration's lights.
+type Record = Vec<Option<(u64, f32)>>;
+
+/// How [`AreaProbes`] weighs the iterations it holds in the cells' areas
+/// and radiances. Either way the weights sum to 1, so every sum stays an
+/// unbiased estimate and the cells still partition the light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ProbeWindow {
+    /// Every iteration alike: each frame the newest comes in at 1/T and
+    /// the oldest goes out at 1/T.
+    Box,
+    /// A triangle, w_b ∝ min(b + 1, T − b) from the oldest b = 0: each
+    /// iteration's weight rises and falls by about 4/T² a frame, so a cell
+    /// changes by a fraction of what one iteration in and one out make it
+    /// change (the frame-to-frame variance of a cell's area falls by about
+    /// 8/T, to a half at T = 16, while the variance of its level rises by a
+    /// third: it averages 3T/4 iterations' worth of probes). Its centre is
+    /// the box's, so a moving light lags as far.
+    #[default]
+    Triangle,
 }
 
 impl AreaProbes {
@@ -426,7 +526,26 @@ impl AreaProbes {
             per_iteration: usize::MAX,
             pushed: 0,
             newest: Vec::new(),
+            window: ProbeWindow::default(),
+            records: VecDeque::new(),
         }
+    }
+
+    /// Weighs the iterations held by `window`.
+    pub fn with_window(mut self, window: ProbeWindow) -> AreaProbes {
+        self.window = window;
+        self
+    }
+
+    /// The weight of each iteration held, oldest first, summing to 1.
+    fn weights(&self) -> Vec<f64> {
+        let t = self.batches.len();
+        let raw: Vec<f64> = match self.window {
+            ProbeWindow::Box => vec![1.0; t],
+            ProbeWindow::Triangle => (0..t).map(|b| (b + 1).min(t - b) as f64).collect(),
+        };
+        let sum: f64 = raw.iter().sum();
+        raw.into_iter().map(|w| w / sum).collect()
     }
 
     /// Keeps about `n` of each iteration's hits as area probes (at least
@@ -444,6 +563,7 @@ impl AreaProbes {
         self.draw_scales.clear();
         self.trees.clear();
         self.known.clear();
+        self.records.clear();
     }
 
     /// Iterations held.
@@ -542,8 +662,10 @@ impl AreaProbes {
             self.batches.pop_front();
             self.draw_scales.pop_front();
             self.trees.pop_front();
+            self.records.pop_front();
         }
         self.batches.push_back(batch);
+        self.records.push_back(None);
         self.draw_scales.push_back(draw_scale);
         self.trees.push_back(tree);
     }
@@ -557,15 +679,14 @@ impl AreaProbes {
         if self.batches.is_empty() {
             return 0.0;
         }
-        let sum: f64 = self
-            .batches
+        self.batches
             .iter()
             .zip(&self.draw_scales)
-            .map(|(b, &k)| {
-                k * b.iter().filter_map(|q| q.radiance.map(|l| q.weight as f64 * vpl_core::image::luminance(l) as f64)).sum::<f64>()
+            .zip(self.weights())
+            .map(|((b, &k), w)| {
+                w * k * b.iter().filter_map(|q| q.radiance.map(|l| q.weight as f64 * vpl_core::image::luminance(l) as f64)).sum::<f64>()
             })
-            .sum();
-        sum / self.batches.len() as f64
+            .sum()
     }
 
     /// Gives the candidate `id` of the newest iteration the radiance `l`
@@ -582,14 +703,29 @@ impl AreaProbes {
         }
     }
 
+    /// Records the radiance of each VPL of the set, `(slot, id, L)`, under
+    /// the lights of the newest iteration held (once; later calls before
+    /// the next [`AreaProbes::push`] change nothing). The cells compare
+    /// each VPL's radiance now with its radiance when their candidates were
+    /// estimated ([`Cell::current_radiance`]).
+    pub fn record(&mut self, vpls: &[(u32, u64, Vec3)]) {
+        let Some(slot @ None) = self.records.back_mut() else { return };
+        let len = vpls.iter().map(|v| v.0 as usize + 1).max().unwrap_or(0);
+        let mut by_slot = vec![None; len];
+        for &(s, id, l) in vpls {
+            let y = vpl_core::image::luminance(l);
+            by_slot[s as usize] = (y.is_finite() && y >= 0.0).then_some((id, y));
+        }
+        *slot = Some(by_slot);
+    }
+
     /// The surface area the probes cover, m²: the mean over iterations of
     /// their summed areas.
     pub fn total_area(&self) -> f64 {
         if self.batches.is_empty() {
             return 0.0;
         }
-        let sum: f64 = self.batches.iter().flatten().map(|q| q.area as f64).sum();
-        sum / self.batches.len() as f64
+        self.batches.iter().zip(self.weights()).map(|(b, w)| w * b.iter().map(|q| q.area as f64).sum::<f64>()).sum()
     }
 
     /// Brings the cells up to date with the set `sites`: the probes of VPLs
@@ -881,24 +1017,42 @@ impl AreaProbes {
         let live = Live::new(sites);
         // Per batch, in parallel, then added in batch order (the same sums
         // on any thread count); the first moments in f64.
+        let weights = self.weights();
+        // Each site's radiance (luminance) as recorded with an iteration,
+        // or now (the newest record) where that iteration has none for it.
+        let recorded = |rec: Option<&Record>, i: usize| -> Option<f32> {
+            let s = &sites[i];
+            rec?.get(s.slot as usize).copied().flatten().filter(|&(id, _)| id == s.id).map(|(_, y)| y)
+        };
+        let newest = self.records.back().and_then(|r| r.as_ref());
+        let now: Vec<Option<f32>> = (0..sites.len()).map(|i| recorded(newest, i)).collect();
         let per_batch: Vec<Vec<(Cell, DVec3, f64)>> = self
             .batches
             .par_iter()
-            .map(|batch| {
+            .zip(&weights)
+            .zip(&self.records)
+            .map(|((batch, &w), rec)| {
                 let mut cells = vec![(Cell::default(), DVec3::ZERO, 0.0); sites.len()];
+                let wf = w as f32;
+                let then: Vec<Option<f32>> = (0..sites.len()).map(|i| recorded(rec.as_ref(), i).or(now[i])).collect();
                 for q in batch {
                     let Some(i) = live.get(q.owner) else { continue };
                     let (c, m, own) = &mut cells[i];
-                    c.area += q.area as f64;
+                    let a = w * q.area as f64;
+                    c.area += a;
                     if q.on_surface_of(&sites[i]) {
-                        *m += q.p.as_dvec3() * q.area as f64;
-                        *own += q.area as f64;
+                        *m += q.p.as_dvec3() * a;
+                        *own += a;
                     }
                     if let Some(l) = q.radiance {
                         c.radiance_sum += l;
                         c.candidates += 1;
-                        c.weighted_radiance += l * q.weight;
-                        c.radiance_weight += q.weight;
+                        c.weighted_radiance += l * (wf * q.weight);
+                        c.radiance_weight += wf * q.weight;
+                        if let Some(y) = then[i] {
+                            c.history_luminance += wf * q.weight * y;
+                            c.history_weight += wf * q.weight;
+                        }
                     }
                 }
                 cells
@@ -914,16 +1068,18 @@ impl AreaProbes {
                 c.candidates += b.candidates;
                 c.weighted_radiance += b.weighted_radiance;
                 c.radiance_weight += b.radiance_weight;
+                c.history_luminance += b.history_luminance;
+                c.history_weight += b.history_weight;
             }
         }
-        let t = self.batches.len() as f64;
         Some(
             cells
                 .into_iter()
                 .zip(sites)
-                .map(|((mut c, m, own), s)| {
+                .zip(now)
+                .map(|(((mut c, m, own), s), now)| {
                     c.centroid = if own > 0.0 { (m / own).as_vec3() } else { s.p };
-                    c.area /= t;
+                    c.luminance_now = now;
                     c
                 })
                 .collect(),
@@ -1092,6 +1248,77 @@ mod tests {
         a.renew(7, Vec3::splat(100.0));
         let mean = a.cells(&s).unwrap()[0].mean_radiance(Vec3::ZERO);
         assert!((mean - Vec3::splat((1.0 + 3.0 * 9.0) / 4.0)).abs().max_element() < 1e-5, "{mean}");
+    }
+
+    /// The triangle window weighs the iterations 1, 2, …, 2, 1 (summing
+    /// to 1); a cell's area is that weighted mean of its iterations' areas,
+    /// and the cells still sum to the probes' area.
+    #[test]
+    fn the_triangle_window_weighs_the_middle_iterations_most() {
+        let scene = floor(false);
+        let s = sites(&[Vec3::new(0.25, 0.0, 0.5), Vec3::new(0.75, 0.0, 0.5)]);
+        // Four iterations: uniform points on the square's left part up to x = 0.25 (k + 1).
+        let mut areas = [Vec::new(), Vec::new()];
+        for (w, window) in [ProbeWindow::Box, ProbeWindow::Triangle].into_iter().enumerate() {
+            let mut a = AreaProbes::new(4).with_window(window);
+            for k in 0..4 {
+                let x1 = 0.25 * (k + 1) as f32;
+                let hits: Vec<Vec3> = uniform(4000, 9, k).into_iter().map(|p| Vec3::new(x1 * p.x, 0.0, p.z)).collect();
+                push(&mut a, &hits, &vec![Vec3::Y; hits.len()], &[]);
+            }
+            let weights = a.weights();
+            let expect: [f64; 4] = if window == ProbeWindow::Box { [0.25; 4] } else { [1.0 / 6.0, 2.0 / 6.0, 2.0 / 6.0, 1.0 / 6.0] };
+            assert!(weights.iter().zip(expect).all(|(w, e)| (w - e).abs() < 1e-12), "{window}: {weights:?}");
+            a.assign(&scene, &CpuRays, &s);
+            let cells = a.cells(&s).unwrap();
+            let sum: f64 = cells.iter().map(|c| c.area).sum();
+            assert!((sum - a.total_area()).abs() < 1e-9 * sum, "{window}: {sum} against {}", a.total_area());
+            areas[w] = cells.iter().map(|c| c.area).collect();
+        }
+        // The right cell holds area only in the later iterations (x > 0.5):
+        // 0.25 and 0.5 of the square in the last two; box (0 + 0 + 0.25 + 0.5) / 4,
+        // triangle (2 · 0.25 + 0.5) / 6, 12 % apart. Each hit's area
+        // π r_1² (N − 1) / N has a relative spread of about 1, so a cell of
+        // some 1000 hits an iteration is measured to about 3 %; the bound is
+        // 8 %.
+        assert!((areas[0][1] / 0.1875 - 1.0).abs() < 0.08, "box: {:?}", areas[0]);
+        assert!((areas[1][1] * 6.0 - 1.0).abs() < 0.08, "triangle: {:?}", areas[1]);
+    }
+
+    /// A cell's radiance is brought forward by its VPL's own change: the
+    /// candidates were estimated when the VPL's luminance was 1, it is 2
+    /// now, so the cell's radiance doubles; with equal records, or no
+    /// record of the VPL then, the mean stays as it is.
+    #[test]
+    fn the_cells_radiance_follows_its_vpls_change() {
+        let scene = floor(false);
+        let s = sites(&[Vec3::new(0.25, 0.0, 0.5), Vec3::new(0.75, 0.0, 0.5)]);
+        let hits: Vec<Vec3> = uniform(400, 3, 0);
+        let normals = vec![Vec3::Y; hits.len()];
+        let run = |then: Option<f32>, now: f32| {
+            let mut a = AreaProbes::new(2);
+            push(&mut a, &hits, &normals, &[(0, Vec3::splat(3.0))]);
+            if let Some(y) = then {
+                a.record(&[(0, 100, Vec3::splat(y)), (1, 101, Vec3::splat(y))]);
+            }
+            push(&mut a, &hits, &normals, &[]);
+            a.record(&[(0, 100, Vec3::splat(now)), (1, 101, Vec3::splat(now))]);
+            // A second record of the same iteration changes nothing.
+            a.record(&[(0, 100, Vec3::splat(50.0)), (1, 101, Vec3::splat(50.0))]);
+            a.assign(&scene, &CpuRays, &s);
+            let cells = a.cells(&s).unwrap();
+            let owner = if hits[0].x < 0.5 { 0 } else { 1 };
+            (cells[owner].mean_radiance(Vec3::ZERO), cells[owner].current_radiance(Vec3::ZERO))
+        };
+        let (mean, now) = run(Some(1.0), 2.0);
+        assert!(
+            (mean - Vec3::splat(3.0)).abs().max_element() < 1e-5 && (now - Vec3::splat(6.0)).abs().max_element() < 1e-4,
+            "{mean} {now}"
+        );
+        let (mean, now) = run(Some(2.0), 2.0);
+        assert!((now - mean).abs().max_element() < 1e-5, "{mean} {now}");
+        let (mean, now) = run(None, 2.0);
+        assert!((now - mean).abs().max_element() < 1e-5, "{mean} {now}");
     }
 
     fn probes(depth: usize, n: usize, seed: u64) -> AreaProbes {

@@ -93,7 +93,7 @@ mod points;
 mod sampler;
 
 pub use config::{SmcConfig, SmcError};
-pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, Site, surface_neighbour_sq};
+pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, surface_neighbour_sq};
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};
 pub use points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, mutually_visible, resolve};
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};

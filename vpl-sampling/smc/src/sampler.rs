@@ -190,7 +190,9 @@ impl SmcSampler {
             next_id: 0,
             iterations: 0,
             lighting: None,
-            probes: AreaProbes::new(config.probe_iterations).with_per_iteration(config.probes_per_iteration()),
+            probes: AreaProbes::new(config.probe_iterations)
+                .with_per_iteration(config.probes_per_iteration())
+                .with_window(config.probe_window),
             shown: vec![None; config.vpls],
             warming: false,
             collect_probes: true,
@@ -587,6 +589,11 @@ impl SmcSampler {
             flux[s] = p.radiance / (n as f32 * p.density);
         }
         let mut shown: Vec<Option<Shown>> = vec![None; self.config.vpls];
+        if self.config.probes() {
+            // Each VPL's radiance under this iteration's lights, beside this iteration's probes.
+            let record: Vec<(u32, u64, Vec3)> = slots.iter().map(|&s| (s as u32, particle(s).id, particle(s).radiance)).collect();
+            self.probes.record(&record);
+        }
         if self.config.probes() && !self.warming {
             let sites: Vec<Site> = slots
                 .iter()
@@ -602,7 +609,7 @@ impl SmcSampler {
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
                 let by_cell: Vec<Vec3> =
-                    slots.iter().zip(&cells).map(|(&s, c)| c.mean_radiance(particle(s).radiance) * c.area as f32).collect();
+                    slots.iter().zip(&cells).map(|(&s, c)| c.current_radiance(particle(s).radiance) * c.area as f32).collect();
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiSite => {

@@ -108,9 +108,11 @@ fn the_default_clamp_takes_at_most_5_percent_along_every_sequence() {
 /// limit as the clamp's).
 ///
 /// Not met yet, measured at these settings: the Munich blocks at frame 0
-/// 1.109 ± 0.016 (an unclamped VPL beside a façade lights it at 1/d²;
-/// 8 seeds with every hit a probe and equal weights gave 1.173 ± 0.033,
-/// so the thinned probes are not the cause); `building`'s sequence
+/// 1.109 ± 0.016 (16 seeds; 8 seeds with every hit a probe and equal
+/// weights gave 1.173 ± 0.033, so the thinned probes are not the cause:
+/// the sites' offset from their cells' centroids is, and a heavy tail of
+/// huge far cells whose light a point cannot stand for; see
+/// `vpl_smc::Placement`); `building`'s sequence
 /// 1.063 ± 0.015 (its lamp, carried from room to room, leaves the cells of
 /// VPLs that joined within the probe window behind by up to T/2
 /// iterations: [`vpl_smc::Cell::current_radiance`] brings forward only the

@@ -8,7 +8,7 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
 use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplSampler, VplVisibility};
-use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps};
+use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, Traffic};
 use vpl_sampling::{SmcConfig, SmcSampler};
 
 /// Medians of one scene's timed frames, milliseconds.
@@ -55,14 +55,43 @@ pub struct GpuBenchRow {
     pub kernels: f64,
     /// The whole indirect frame as run: sampling, kernels, uploads and read-backs.
     pub frame: f64,
+    /// Whether the frame stayed on the device (G-buffer and image not read
+    /// back), as a renderer under `ReadBack::Nothing` runs it.
+    pub resident: bool,
+    /// Host↔device traffic of a frame (medians of each count).
+    pub traffic: Traffic,
+    /// Of which: the SMC sampler's step.
+    pub sampling_traffic: Traffic,
+}
+
+/// Per-field medians of traffic readings.
+fn median_traffic(t: &[Traffic]) -> Traffic {
+    let m = |f: fn(&Traffic) -> u64| median(t.iter().map(|x| f(x) as f64).collect()).round() as u64;
+    Traffic {
+        bytes_up: m(|x| x.bytes_up),
+        bytes_down: m(|x| x.bytes_down),
+        writes: m(|x| x.writes),
+        reads: m(|x| x.reads),
+        submissions: m(|x| x.submissions),
+    }
 }
 
 /// Times `frames` frames (after one untimed warm-up frame, which compiles
 /// the kernels and renders every map) of `scene`'s sequence from frame
 /// `start` at `size` with `vpls` SMC VPLs, 128² maps, 4×4 interleaved
 /// shading with the filter and G_max = I / A_view. Every step is waited for on
-/// the device, so the times add up.
-pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start: u32, frames: u32) -> Result<GpuBenchRow, BenchError> {
+/// the device, so the times add up. With `resident` the frame stays on the
+/// device (the G-buffer and the image are not read back); without, both are
+/// read back as a host-side renderer needs them.
+pub fn bench_scene(
+    gpu: &Gpu,
+    scene: &str,
+    size: (u32, u32),
+    vpls: usize,
+    start: u32,
+    frames: u32,
+    resident: bool,
+) -> Result<GpuBenchRow, BenchError> {
     let setup = SceneSetup::load(scene)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
@@ -70,18 +99,23 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
     let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
+    shader.keep_on_device(resident);
     let mut rows: Vec<[f64; 14]> = Vec::new();
+    let mut traffic = Vec::new();
     let mut first = (0.0, 0);
     for k in 0..=frames {
         let f = (start + k).min(count - 1);
         let (sc, camera) = setup.frame(f)?;
         let camera = camera.with_resolution(size)?;
         let t_frame = Instant::now();
-        let gbuf = gpu.render_gbuffer(&sc, &camera)?;
+        let tr0 = gpu.traffic();
+        let gbuf = if resident { gpu.render_gbuffer_on_device(&sc, &camera)? } else { gpu.render_gbuffer(&sc, &camera)? };
         let (g_ms, g_read) = gpu.gbuffer_timings();
         let frame = Frame { scene: &sc, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let t0 = Instant::now();
+        let tr1 = gpu.traffic();
         let set = smc.next_frame(&frame).clone();
+        let tr2 = gpu.traffic();
         let s_ms = t0.elapsed().as_secs_f64() * 1e3;
         let st = smc.timings();
         let t0 = Instant::now();
@@ -89,10 +123,12 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
         let m_ms = t0.elapsed().as_secs_f64() * 1e3;
         std::hint::black_box(shader.shade(&gbuf, &set, &maps));
         let total = t_frame.elapsed().as_secs_f64() * 1e3;
+        let tr3 = gpu.traffic();
         let d = shader.device_timings();
         if k == 0 {
             first = (m_ms, u.rebuilt);
         } else {
+            traffic.push((tr3 - tr0, tr2 - tr1));
             rows.push([
                 g_ms,
                 g_read,
@@ -133,6 +169,9 @@ pub fn bench_scene(gpu: &Gpu, scene: &str, size: (u32, u32), vpls: usize, start:
         image_read: col(8),
         kernels: col(9),
         frame: col(10),
+        resident,
+        traffic: median_traffic(&traffic.iter().map(|t| t.0).collect::<Vec<_>>()),
+        sampling_traffic: median_traffic(&traffic.iter().map(|t| t.1).collect::<Vec<_>>()),
     })
 }
 
@@ -175,6 +214,25 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
     md.push_str("\nSMC sampling by step (ms; rays and radiosity on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL, GPU) | kNN (CPU) | total |\n| --- | ---: | ---: | ---: | ---: |\n");
     for r in rows {
         let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
+    }
+    md.push_str("\nHost↔device traffic per frame (medians; the counts do not depend on the device's speed). *Resident*: the G-buffer and the image stay on the device; otherwise both are read back every frame:\n\n| scene | resident | up (KiB) | writes | down (KiB) | reads | submissions | of which SMC: up (KiB) | down (KiB) | submissions |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    let kib = |b: u64| b as f64 / 1024.0;
+    for r in rows {
+        let (t, s) = (r.traffic, r.sampling_traffic);
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {:.1} | {} | {:.1} | {} | {} | {:.1} | {:.1} | {} |",
+            r.scene,
+            if r.resident { "yes" } else { "no" },
+            kib(t.bytes_up),
+            t.writes,
+            kib(t.bytes_down),
+            t.reads,
+            t.submissions,
+            kib(s.bytes_up),
+            kib(s.bytes_down),
+            s.submissions
+        );
     }
     md
 }

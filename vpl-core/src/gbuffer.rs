@@ -71,6 +71,21 @@ impl GBuffer {
         GBuffer { width: 0, height: 0, samples: Vec::new(), pixel_angle: 0.0, eye: Vec3::ZERO }
     }
 
+    /// A G-buffer whose samples stay on a device: its size, pixel angle and
+    /// eye on the host, and no samples (`samples` is empty). A backend that
+    /// keeps the frame on its device hands these to the stages that run
+    /// there, and reads the samples back only when asked
+    /// (`vpl_render::Backend::host_gbuffer`).
+    pub fn on_device(width: u32, height: u32, pixel_angle: f32, eye: Vec3) -> GBuffer {
+        GBuffer { width, height, samples: Vec::new(), pixel_angle, eye }
+    }
+
+    /// Whether the samples are on the host: one per pixel (false for
+    /// [`GBuffer::on_device`] of a non-empty size).
+    pub fn on_host(&self) -> bool {
+        self.samples.len() == self.width as usize * self.height as usize
+    }
+
     /// The sample of pixel (x, y).
     #[inline]
     pub fn at(&self, x: u32, y: u32) -> &GSample {

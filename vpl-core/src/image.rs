@@ -22,6 +22,19 @@ impl Image {
         Image { width, height, data: vec![Vec3::ZERO; width as usize * height as usize] }
     }
 
+    /// An image left on a device: its size, and no pixels on the host
+    /// (`data` is empty). The stage that made it reads it back on request
+    /// (`IndirectShader::read_image`).
+    pub fn on_device(width: u32, height: u32) -> Image {
+        Image { width, height, data: Vec::new() }
+    }
+
+    /// Whether the pixels are on the host: one per pixel (false for
+    /// [`Image::on_device`] of a non-empty size).
+    pub fn on_host(&self) -> bool {
+        self.data.len() == self.width as usize * self.height as usize
+    }
+
     /// Pixel (x, y).
     #[inline]
     pub fn get(&self, x: u32, y: u32) -> Vec3 {

@@ -51,6 +51,12 @@ pub trait VplSampler: Send {
     fn stats(&self) -> Stats {
         Stats::default()
     }
+    /// Whether the sampler reads the previous frame's image
+    /// ([`Frame::previous`]): a renderer that keeps its frames on a device
+    /// then reads each image back for it. `false` by default.
+    fn reads_previous_image(&self) -> bool {
+        false
+    }
 }
 
 /// A source of VPLs from light paths whose number is chosen per call, each
@@ -145,4 +151,24 @@ pub trait IndirectShader: Send {
     /// The geometry-term clamp of the frames after this call (`None`: off);
     /// a renderer whose clamp follows the view sets it when the camera moves.
     fn set_clamp(&mut self, clamp: Option<crate::clamp::GeometryClamp>);
+    /// Whether this shader, with `vis`, shades on a device: it then takes a
+    /// G-buffer whose samples stay there ([`GBuffer::on_device`]) and can
+    /// leave its image there ([`IndirectShader::keep_on_device`]). `false`
+    /// by default (the CPU shaders).
+    fn on_device(&self, vis: &dyn VplVisibility) -> bool {
+        let _ = vis;
+        false
+    }
+    /// Where [`IndirectShader::on_device`]: with `keep`, the following
+    /// shades leave their images on the device and return
+    /// [`Image::on_device`]; [`IndirectShader::read_image`] reads the last
+    /// one back. Ignored by shaders on the host.
+    fn keep_on_device(&mut self, keep: bool) {
+        let _ = keep;
+    }
+    /// The image the last shade left on the device, read back; `None` when
+    /// it left none there.
+    fn read_image(&self) -> Option<Image> {
+        None
+    }
 }

@@ -70,6 +70,19 @@ impl Backend for GpuBackend {
         Ok(g)
     }
 
+    fn device_gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<Option<GBuffer>, RenderError> {
+        self.gpu.render_gbuffer_on_device(scene, camera).map(Some).map_err(err)
+    }
+
+    fn host_gbuffer(&self, g: GBuffer, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {
+        if g.on_host() {
+            return Ok(g);
+        }
+        let mut g = self.gpu.read_gbuffer(g).map_err(err)?;
+        vpl_shading::environment_at_misses(&mut g, scene, camera);
+        Ok(g)
+    }
+
     /// Each per-pixel buffer (16 bytes a pixel) must fit the adapter's
     /// storage-buffer limit.
     fn check_size(&self, size: (u32, u32)) -> Result<(), RenderError> {

@@ -25,21 +25,38 @@ struct Inner {
     gbuffer_ms: Mutex<(f64, f64)>,
 }
 
-/// The device G-buffer and the host copy it was read into, recognised by
-/// the address and size of the host copy's samples and by its first and
-/// last samples.
+/// The device G-buffer of the last frame, and what the host holds of it:
+/// the copy it was read into, recognised by the address and size of its
+/// samples and by its first and last samples; or no samples
+/// ([`GBuffer::on_device`]), recognised by size, pixel angle and eye.
 struct Resident {
-    key: (usize, usize, u32, u32),
-    ends: Option<(vpl_core::GSample, vpl_core::GSample)>,
+    host: Option<(HostKey, Ends)>,
     buffer: Arc<DeviceGBuffer>,
 }
 
-fn key_of(g: &GBuffer) -> (usize, usize, u32, u32) {
+/// Address and length of a host G-buffer's samples, and its size.
+type HostKey = (usize, usize, u32, u32);
+/// First and last samples of a host G-buffer (none when it is empty).
+type Ends = Option<(vpl_core::GSample, vpl_core::GSample)>;
+
+fn key_of(g: &GBuffer) -> HostKey {
     (g.samples.as_ptr() as usize, g.samples.len(), g.width, g.height)
 }
 
-fn ends_of(g: &GBuffer) -> Option<(vpl_core::GSample, vpl_core::GSample)> {
+fn ends_of(g: &GBuffer) -> Ends {
     Some((*g.samples.first()?, *g.samples.last()?))
+}
+
+impl Resident {
+    fn is(&self, g: &GBuffer) -> bool {
+        match &self.host {
+            Some((key, ends)) => *key == key_of(g) && *ends == ends_of(g),
+            None => {
+                let b = &self.buffer;
+                !g.on_host() && (b.width, b.height, b.pixel_angle, b.eye) == (g.width, g.height, g.pixel_angle, g.eye)
+            }
+        }
+    }
 }
 
 impl Gpu {
@@ -58,6 +75,11 @@ impl Gpu {
             resident: Mutex::new(None),
             gbuffer_ms: Mutex::new((0.0, 0.0)),
         }))
+    }
+
+    /// Whether `other` is a handle to the same device.
+    pub fn same(&self, other: &Gpu) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
     }
 
     /// The context.
@@ -79,21 +101,35 @@ impl Gpu {
         self.0.filter_kernel.get_or_init(|| FilterKernel::new(&self.0.ctx))
     }
 
-    /// Records that `host` is the read-back of `device`.
-    pub(crate) fn set_resident(&self, host: &GBuffer, device: Arc<DeviceGBuffer>) {
-        *self.0.resident.lock().expect("resident lock") = Some(Resident { key: key_of(host), ends: ends_of(host), buffer: device });
+    /// Records that `host` is the read-back of `device`, or (`None`) that
+    /// the host holds none of its samples.
+    fn set_resident(&self, host: Option<&GBuffer>, device: Arc<DeviceGBuffer>) {
+        let host = host.map(|h| (key_of(h), ends_of(h)));
+        *self.0.resident.lock().expect("resident lock") = Some(Resident { host, buffer: device });
     }
 
-    /// The device copy of `host`: the resident G-buffer when `host` is its
-    /// read-back, else an upload.
-    pub(crate) fn device_gbuffer(&self, host: &GBuffer) -> Arc<DeviceGBuffer> {
+    /// The device copy of `g`: the resident G-buffer when `g` is its
+    /// read-back or its [`GBuffer::on_device`] stand-in, else an upload of
+    /// `g`'s samples. A stand-in of no resident G-buffer is an error.
+    pub(crate) fn device_gbuffer(&self, g: &GBuffer) -> Result<Arc<DeviceGBuffer>, GpuError> {
         if let Some(r) = self.0.resident.lock().expect("resident lock").as_ref()
-            && r.key == key_of(host)
-            && r.ends == ends_of(host)
+            && r.is(g)
         {
-            return r.buffer.clone();
+            return Ok(r.buffer.clone());
         }
-        Arc::new(DeviceGBuffer::upload(&self.0.ctx, host))
+        if !g.on_host() {
+            return Err(GpuError::Invalid(format!(
+                "a {}x{} G-buffer without samples that is not this device's last one",
+                g.width, g.height
+            )));
+        }
+        Ok(Arc::new(DeviceGBuffer::upload(&self.0.ctx, g)))
+    }
+
+    /// What has crossed between host and device so far
+    /// ([`GpuContext::traffic`]).
+    pub fn traffic(&self) -> crate::Traffic {
+        self.0.ctx.traffic()
     }
 }
 
@@ -108,7 +144,35 @@ impl Gpu {
         let t1 = std::time::Instant::now();
         let host = device.read(&self.0.ctx)?;
         *self.0.gbuffer_ms.lock().expect("timings lock") = ((t1 - t0).as_secs_f64() * 1e3, t1.elapsed().as_secs_f64() * 1e3);
-        self.set_resident(&host, Arc::new(device));
+        self.set_resident(Some(&host), Arc::new(device));
+        Ok(host)
+    }
+
+    /// Renders the G-buffer of `scene` seen by `camera` and leaves it on the
+    /// device: the answer is its [`GBuffer::on_device`] stand-in, which the
+    /// shader of the same frame reads through, and
+    /// [`Gpu::read_gbuffer`] reads back on request. Nothing crosses but the
+    /// camera's parameters.
+    pub fn render_gbuffer_on_device(&self, scene: &Scene, camera: &vpl_core::Camera) -> Result<GBuffer, GpuError> {
+        let gs = self.scene(scene)?;
+        let t0 = std::time::Instant::now();
+        let device = self.gbuffer_kernel().render(&self.0.ctx, &gs, scene, camera)?;
+        *self.0.gbuffer_ms.lock().expect("timings lock") = (t0.elapsed().as_secs_f64() * 1e3, 0.0);
+        let g = GBuffer::on_device(device.width, device.height, device.pixel_angle, device.eye);
+        self.set_resident(None, Arc::new(device));
+        Ok(g)
+    }
+
+    /// The samples of `g`: `g` itself when they are on the host, else those
+    /// of the G-buffer [`Gpu::render_gbuffer_on_device`] left on the device
+    /// for it, read back (and remembered as its host copy).
+    pub fn read_gbuffer(&self, g: GBuffer) -> Result<GBuffer, GpuError> {
+        if g.on_host() {
+            return Ok(g);
+        }
+        let device = self.device_gbuffer(&g)?;
+        let host = device.read(&self.0.ctx)?;
+        self.set_resident(Some(&host), device);
         Ok(host)
     }
 

@@ -79,6 +79,10 @@ pub struct GpuInterleavedShader {
     timings: ShadeTimings,
     device_timings: GpuShadeTimings,
     exhaustive: bool,
+    /// Leave images on the device ([`IndirectShader::keep_on_device`]).
+    keep: bool,
+    /// The last image left on the device: its size and buffer.
+    kept: Option<(u32, u32, wgpu::Buffer)>,
 }
 
 impl GpuInterleavedShader {
@@ -93,6 +97,8 @@ impl GpuInterleavedShader {
             timings: ShadeTimings::default(),
             device_timings: GpuShadeTimings::default(),
             exhaustive: false,
+            keep: false,
+            kept: None,
         }
     }
 
@@ -146,7 +152,17 @@ impl GpuInterleavedShader {
         self.subsets = Some((slots, storage_init(ctx, "subset slots", &flat), storage_init(ctx, "subset offsets", &offsets)));
     }
 
+    /// Whether `vis` is a visibility on this shader's device.
+    fn device_visibility(&self, vis: &dyn VplVisibility) -> bool {
+        let any = vis.as_any();
+        any.downcast_ref::<GpuShadowMaps>().is_some_and(|m| m.gpu().same(&self.gpu))
+            || any.downcast_ref::<GpuRayTraced>().is_some_and(|r| r.gpu().same(&self.gpu))
+    }
+
     fn shade_on_device(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Option<Result<Image, GpuError>> {
+        if !self.device_visibility(vis) {
+            return None;
+        }
         let any = vis.as_any();
         // (mode, scene, eps, res, bias scale, maps)
         let (mode, scene, eps, res, bias, sm): (u32, Arc<GpuScene>, f32, u32, f32, Option<&GpuShadowMaps>) =
@@ -180,8 +196,8 @@ impl GpuInterleavedShader {
         let ctx = gpu.ctx();
         let k = self.kernels.as_ref().expect("compiled");
         let (_, b_slots, b_offsets) = self.subsets.as_ref().expect("uploaded");
-        let g = gpu.device_gbuffer(gbuf);
-        let n = gbuf.samples.len();
+        let g = gpu.device_gbuffer(gbuf)?;
+        let n = gbuf.width as usize * gbuf.height as usize;
         let rows: Vec<Vec4> = vpls
             .slots()
             .iter()
@@ -243,14 +259,23 @@ impl GpuInterleavedShader {
         dispatch(&mut enc, &k.modulate, &[&mgroup], groups);
         finish(ctx, enc)?;
         let t2 = Instant::now();
-        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
+        let out: Vec<Vec4> = if self.keep { Vec::new() } else { read_back(ctx, &b_out, n)? };
         let t3 = Instant::now();
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         self.timings = ShadeTimings { gather_ms: ms(t0, t1), filter_ms: ms(t1, t3) };
         self.device_timings =
             GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
-        Ok(Image { width: gbuf.width, height: gbuf.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
+        if self.keep {
+            self.kept = Some((gbuf.width, gbuf.height, b_out));
+            return Ok(Image::on_device(gbuf.width, gbuf.height));
+        }
+        self.kept = None;
+        Ok(image_of(gbuf.width, gbuf.height, out))
     }
+}
+
+fn image_of(width: u32, height: u32, rgba: Vec<Vec4>) -> Image {
+    Image { width, height, data: rgba.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() }
 }
 
 impl IndirectShader for GpuInterleavedShader {
@@ -263,18 +288,43 @@ impl IndirectShader for GpuInterleavedShader {
         if self.exhaustive { "exhaustive" } else { "interleaved" }
     }
 
+    fn on_device(&self, vis: &dyn VplVisibility) -> bool {
+        self.device_visibility(vis)
+    }
+
+    fn keep_on_device(&mut self, keep: bool) {
+        self.keep = keep;
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn read_image(&self) -> Option<Image> {
+        let (w, h, b) = self.kept.as_ref()?;
+        let n = *w as usize * *h as usize;
+        let rgba = read_back(self.gpu.ctx(), b, n).unwrap_or_else(|e| panic!("GPU image read-back: {e}"));
+        Some(image_of(*w, *h, rgba))
+    }
+
     /// # Panics
     /// When the device fails.
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
-        match self.shade_on_device(gbuf, vpls, vis) {
-            Some(Ok(img)) => img,
+        self.kept = None;
+        let host;
+        let gbuf = match self.shade_on_device(gbuf, vpls, vis) {
+            Some(Ok(img)) => return img,
             Some(Err(e)) => panic!("GPU interleaved shading: {e}"),
-            None if self.exhaustive => ExhaustiveShader { clamp: self.cpu.clamp }.shade(gbuf, vpls, vis),
-            None => {
-                let img = self.cpu.shade(gbuf, vpls, vis);
-                self.timings = self.cpu.timings();
-                img
+            // The CPU twin needs the samples on the host.
+            None if !gbuf.on_host() => {
+                host = self.gpu.read_gbuffer(gbuf.clone()).unwrap_or_else(|e| panic!("GPU G-buffer read-back: {e}"));
+                &host
             }
+            None => gbuf,
+        };
+        if self.exhaustive {
+            return ExhaustiveShader { clamp: self.cpu.clamp }.shade(gbuf, vpls, vis);
         }
+        let img = self.cpu.shade(gbuf, vpls, vis);
+        self.timings = self.cpu.timings();
+        img
     }
 }

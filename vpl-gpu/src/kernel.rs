@@ -82,6 +82,7 @@ pub(crate) fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data
     } else {
         bytes
     };
+    ctx.note_upload(contents.len() as u64);
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents,
@@ -91,6 +92,7 @@ pub(crate) fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data
 
 /// A uniform buffer holding `value`.
 pub(crate) fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+    ctx.note_upload(std::mem::size_of::<T>() as u64);
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::bytes_of(value),
@@ -143,7 +145,7 @@ pub(crate) fn groups_1d(ctx: &GpuContext, n: u64, size: u32) -> (u32, u32, u32) 
 
 /// Submits `enc` and waits for the device.
 pub(crate) fn finish(ctx: &GpuContext, enc: wgpu::CommandEncoder) -> Result<(), GpuError> {
-    ctx.queue.submit([enc.finish()]);
+    ctx.submit([enc.finish()]);
     ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::ReadBack(e.to_string()))?;
     Ok(())
 }
@@ -163,7 +165,8 @@ pub(crate) fn read_back<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffe
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read-back") });
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-    ctx.queue.submit([enc.finish()]);
+    ctx.submit([enc.finish()]);
+    ctx.note_read(size);
     let slice = staging.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {

@@ -70,7 +70,7 @@ mod scene;
 mod shadow_maps;
 
 pub use backend::{GpuBackend, backend};
-pub use context::{GpuContext, GpuError};
+pub use context::{GpuContext, GpuError, Traffic};
 pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};

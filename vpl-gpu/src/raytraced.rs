@@ -25,6 +25,10 @@ impl GpuRayTraced {
     }
 
     /// The device scene and its ray offset ε, after the first update.
+    pub(crate) fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
     pub(crate) fn device_scene(&self) -> Option<&(Arc<GpuScene>, f32)> {
         self.scene.as_ref()
     }

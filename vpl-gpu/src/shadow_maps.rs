@@ -102,7 +102,7 @@ impl GpuShadowMaps {
             if let Some((old, n, _)) = &self.device {
                 let mut enc = ctx.device.create_command_encoder(&Default::default());
                 enc.copy_buffer_to_buffer(old, 0, &atlas, 0, res2 * 4 * *n as u64);
-                ctx.queue.submit([enc.finish()]);
+                ctx.submit([enc.finish()]);
             }
             self.device = Some((atlas, slots, headers));
         }
@@ -115,7 +115,7 @@ impl GpuShadowMaps {
                 None => [Vec4::ZERO; 4],
             })
             .collect();
-        ctx.queue.write_buffer(b_headers, 0, bytemuck::cast_slice(&rows));
+        ctx.write_buffer(b_headers, 0, bytemuck::cast_slice(&rows));
         if jobs.is_empty() {
             return Ok(());
         }
@@ -144,6 +144,10 @@ impl GpuShadowMaps {
     }
 
     /// The device scene of the last update.
+    pub(crate) fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
     pub(crate) fn device_scene(&self) -> Option<&Arc<GpuScene>> {
         self.scene.as_ref()
     }

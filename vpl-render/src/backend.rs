@@ -24,8 +24,31 @@ pub trait Backend: Send {
         Services::cpu()
     }
 
-    /// The G-buffer of `scene` seen by `camera`.
+    /// The G-buffer of `scene` seen by `camera`, on the host.
     fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError>;
+
+    /// The G-buffer of `scene` seen by `camera` left on the backend's device
+    /// ([`GBuffer::on_device`]: no samples on the host), for a frame whose
+    /// stages all run there; `None` (the default, and the CPU's answer)
+    /// where the backend has no device to keep it on.
+    fn device_gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<Option<GBuffer>, RenderError> {
+        let _ = (scene, camera);
+        Ok(None)
+    }
+
+    /// The host copy of `g`, the G-buffer of `scene` seen by `camera`: `g`
+    /// itself when its samples are on the host; the samples of the last
+    /// G-buffer this backend left on its device, read back, when `g` is
+    /// that one (as [`Backend::gbuffer`] would have made them). Anything
+    /// else is an error.
+    fn host_gbuffer(&self, g: GBuffer, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {
+        let _ = (scene, camera);
+        if g.on_host() {
+            Ok(g)
+        } else {
+            Err(RenderError::Invalid(format!("the {} backend holds no device G-buffer of {}x{}", self.name(), g.width, g.height)))
+        }
+    }
 
     /// Whether images of `size` fit the backend (a GPU's buffer limits).
     fn check_size(&self, size: (u32, u32)) -> Result<(), RenderError> {

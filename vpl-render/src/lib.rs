@@ -76,7 +76,7 @@ pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, rend
 pub use memory::MemoryEstimate;
 pub use renderer::{Renderer, RendererBuilder, SamplerChoice};
 pub use sequence::{SequenceFrame, default_tracked_pixels, run_sequence};
-pub use spec::{Clamp, ShadingSpec, VisibilitySpec};
+pub use spec::{Clamp, ReadBack, ShadingSpec, VisibilitySpec};
 /// The core types (scenes, cameras, images, VPL sets), for crates that depend on this one.
 pub use vpl_core;
 pub use vpl_sampling::Registry;

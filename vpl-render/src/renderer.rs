@@ -6,7 +6,7 @@ use crate::backend::{Backend, CpuBackend};
 use crate::compensation::Compensation;
 use crate::error::RenderError;
 use crate::frame::{FrameOutput, FrameSettings, render_frame_cancellable_on};
-use crate::spec::{Clamp, ShadingSpec, VisibilitySpec};
+use crate::spec::{Clamp, ReadBack, ShadingSpec, VisibilitySpec};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 use vpl_core::{Budget, Camera, GeometryClamp, Image, IndirectShader, Mode, Params, Scene, VplSampler, VplVisibility};
@@ -55,6 +55,7 @@ pub struct RendererBuilder<'a> {
     direct_samples: u32,
     seed: u64,
     backend: Option<Box<dyn Backend>>,
+    read_back: ReadBack,
 }
 
 impl<'a> RendererBuilder<'a> {
@@ -138,6 +139,13 @@ impl<'a> RendererBuilder<'a> {
         self
     }
 
+    /// What frames on a device bring to the host ([`ReadBack::All`] by
+    /// default).
+    pub fn read_back(mut self, read_back: ReadBack) -> Self {
+        self.read_back = read_back;
+        self
+    }
+
     /// Where the stages run ([`CpuBackend`] by default).
     pub fn backend(mut self, backend: impl Backend + 'static) -> Self {
         self.backend = Some(Box::new(backend));
@@ -205,6 +213,8 @@ impl<'a> RendererBuilder<'a> {
             visibility,
             shader,
             previous: None,
+            read_back: self.read_back,
+            last_on_device: false,
         })
     }
 }
@@ -230,6 +240,9 @@ pub struct Renderer {
     /// under the view rule.
     shader: Option<Box<dyn IndirectShader>>,
     previous: Option<Image>,
+    read_back: ReadBack,
+    /// Whether the last frame left its image on the device.
+    last_on_device: bool,
 }
 
 impl Renderer {
@@ -249,6 +262,7 @@ impl Renderer {
             direct_samples: 16,
             seed: 0,
             backend: None,
+            read_back: ReadBack::All,
         }
     }
 
@@ -302,8 +316,24 @@ impl Renderer {
             time,
             compensation,
         };
+        // The frame stays on the device where every stage runs there (see
+        // ReadBack): the G-buffer is not read back, nor, under
+        // ReadBack::Nothing, the image.
+        let resident = self.read_back != ReadBack::All
+            && self.mode == Mode::Indirect
+            && compensation.is_none()
+            && !self.sampler.reads_previous_image()
+            && shader.on_device(self.visibility.as_ref());
+        shader.keep_on_device(resident && self.read_back == ReadBack::Nothing);
         let t0 = Instant::now();
-        let gbuffer = self.backend.gbuffer(scene, camera)?;
+        let gbuffer = match resident {
+            true => self.backend.device_gbuffer(scene, camera)?,
+            false => None,
+        };
+        let gbuffer = match gbuffer {
+            Some(g) => g,
+            None => self.backend.gbuffer(scene, camera)?,
+        };
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let out = render_frame_cancellable_on(
             gbuffer,
@@ -323,8 +353,18 @@ impl Renderer {
         if let Some((stage, count)) = out.non_finite {
             return Err(RenderError::NonFinite { stage, count, frame: index });
         }
-        self.previous = out.indirect.clone();
+        self.last_on_device = !out.image.on_host();
+        self.previous = out.indirect.clone().filter(|i| i.on_host());
         Ok(out)
+    }
+
+    /// The last frame's image on the host: read back from the device when
+    /// the frame left it there ([`ReadBack::Nothing`]), else a copy of
+    /// [`FrameOutput::image`]'s indirect light; `None` before the first
+    /// frame. Under [`ReadBack::Nothing`] this is the one read a caller
+    /// pays for, when it wants the pixels (to write a file).
+    pub fn read_image(&self) -> Option<Image> {
+        if self.last_on_device { self.shader.as_ref()?.read_image() } else { self.previous.clone() }
     }
 
     /// The budget and depth every stage reads.

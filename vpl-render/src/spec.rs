@@ -79,3 +79,26 @@ impl From<Option<GeometryClamp>> for Clamp {
         c.map_or(Clamp::Off, Clamp::Value)
     }
 }
+
+/// What a frame brings to the host when its stages run on a device. The
+/// CPU backend has everything on the host and ignores it.
+///
+/// A frame stays on the device only where every stage of it can: indirect
+/// light only ([`vpl_core::Mode::Indirect`]; emission and the direct light
+/// read the G-buffer on the host), no bias compensation, a shader and
+/// visibility on the device, and a sampler that does not read the previous
+/// image. Otherwise the frame reads back what its host stages need, as
+/// with [`ReadBack::All`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ReadBack {
+    /// The G-buffer and the image, every frame (the default).
+    #[default]
+    All,
+    /// The image every frame; the G-buffer stays on the device
+    /// ([`vpl_core::GBuffer::on_device`] in the output).
+    Image,
+    /// Nothing: the image stays on the device too
+    /// ([`vpl_core::Image::on_device`] in the output) until
+    /// [`crate::Renderer::read_image`] asks for it.
+    Nothing,
+}

@@ -25,17 +25,29 @@ pub(super) struct Args {
     /// Also write gpu_bench.md and gpu_bench.json into this folder.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Read the G-buffer and the image back every frame, as a host-side
+    /// renderer does (default: the frame stays on the device).
+    #[arg(long)]
+    read_back: bool,
 }
 
 /// Runs `vpl bench-gpu`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
-    let Args { scenes, size: Size(w, h), vpls, frames, threads, out } = args;
-    bench_gpu(&scenes, (w, h), vpls, frames, threads, out.as_deref())
+    let Args { scenes, size: Size(w, h), vpls, frames, threads, out, read_back } = args;
+    bench_gpu(&scenes, (w, h), vpls, frames, threads, !read_back, out.as_deref())
 }
 
 /// `vpl bench-gpu`.
 #[cfg(feature = "gpu")]
-fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, threads: Option<usize>, out: Option<&Path>) -> Res<()> {
+fn bench_gpu(
+    scenes: &[String],
+    size: (u32, u32),
+    vpls: usize,
+    frames: u32,
+    threads: Option<usize>,
+    resident: bool,
+    out: Option<&Path>,
+) -> Res<()> {
     if frames == 0 || vpls == 0 {
         return Err("--frames and --vpls must be at least 1".into());
     }
@@ -50,7 +62,7 @@ fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, thre
     for s in scenes {
         eprintln!("vpl: bench-gpu: {s} ({vpls} VPLs, {}x{}, {frames} frames)", size.0, size.1);
         let start = crate::table1::rows::row(s).map_or(0, |r| r.quick_frames.start);
-        rows.push(pool.install(|| crate::gpu_bench::bench_scene(&gpu, s, size, vpls, start, frames)).map_err(|e| e.to_string())?);
+        rows.push(pool.install(|| crate::gpu_bench::bench_scene(&gpu, s, size, vpls, start, frames, resident)).map_err(|e| e.to_string())?);
     }
     let md = crate::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
     println!("{md}");
@@ -67,6 +79,6 @@ fn bench_gpu(scenes: &[String], size: (u32, u32), vpls: usize, frames: u32, thre
 
 /// `vpl bench-gpu` without the GPU backend.
 #[cfg(not(feature = "gpu"))]
-fn bench_gpu(_: &[String], _: (u32, u32), _: usize, _: u32, _: Option<usize>, _: Option<&Path>) -> Res<()> {
+fn bench_gpu(_: &[String], _: (u32, u32), _: usize, _: u32, _: Option<usize>, _: bool, _: Option<&Path>) -> Res<()> {
     Err("bench-gpu: this build has no GPU backend (build vpl-bench with its default feature `gpu`)".into())
 }

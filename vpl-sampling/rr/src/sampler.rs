@@ -139,6 +139,11 @@ impl VplSampler for RrSampler {
         "rr"
     }
 
+    /// Φ̃_total comes from the previous frame's image.
+    fn reads_previous_image(&self) -> bool {
+        true
+    }
+
     fn next_frame(&mut self, frame: &Frame) -> &VplSet {
         let start = Instant::now();
         let c = self.config;

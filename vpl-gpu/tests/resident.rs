@@ -1,0 +1,122 @@
+//! The frame on the device: a renderer on the GPU backend under
+//! `ReadBack::Nothing` leaves the G-buffer and the image on the device, and
+//! what crosses between host and device per frame is counted
+//! ([`vpl_gpu::Traffic`]). The counts do not depend on the device's speed,
+//! so lavapipe holds them for every GPU.
+//!
+//! - The resident frame's image, read back once on request, is the image the
+//!   same renderer gives when it reads everything back, bit for bit (the same
+//!   kernels on the same inputs).
+//! - A steady-state frame of SMC at 1920×1080 with 2048 VPLs moves, besides
+//!   the sampler's own step, at most 512 KiB and reads nothing back, in at
+//!   most 8 submissions: the VPL rows (48 B a slot), the shadow maps' headers
+//!   (64 B a slot) and jobs, and the kernels' parameters. Reading the G-buffer
+//!   and image back instead moves 5 + 1 buffers of 16 B a pixel (199 MB).
+//!   The sampler's step (its rays and radiosity estimates on the GPU, the
+//!   rest on the CPU) is printed: moving it onto the device is what remains
+//!   of the 2 MB and 16-submission target for the whole frame.
+
+mod common;
+
+use common::context;
+use std::sync::{Arc, Mutex};
+use vpl_core::{Frame, Mode, SceneSetup, Services, Stats, VplSampler, VplSet};
+use vpl_gpu::{Gpu, GpuBackend, Traffic};
+use vpl_render::{Backend, ReadBack, Renderer};
+use vpl_smc::{SmcConfig, SmcSampler};
+
+/// A sampler that records the device traffic of its own step.
+struct Counted {
+    inner: SmcSampler,
+    gpu: Gpu,
+    last: Arc<Mutex<Traffic>>,
+}
+
+impl VplSampler for Counted {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn next_frame(&mut self, frame: &Frame) -> &VplSet {
+        let t0 = self.gpu.traffic();
+        self.inner.next_frame(frame);
+        *self.last.lock().unwrap() = self.gpu.traffic() - t0;
+        self.inner.vpls()
+    }
+    fn stats(&self) -> Stats {
+        VplSampler::stats(&self.inner)
+    }
+}
+
+fn renderer(gpu: &Gpu, setup: &SceneSetup, vpls: usize, read_back: ReadBack) -> (Renderer, Arc<Mutex<Traffic>>) {
+    let backend = GpuBackend::new(gpu.clone());
+    let services: Services = backend.services();
+    let inner = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services).unwrap();
+    let last = Arc::new(Mutex::new(Traffic::default()));
+    let sampler: Box<dyn VplSampler> = Box::new(Counted { inner, gpu: gpu.clone(), last: last.clone() });
+    let r = Renderer::builder(&setup.scene)
+        .vpls(vpls)
+        .sampler(sampler)
+        .mode(Mode::Indirect)
+        .seed(7)
+        .read_back(read_back)
+        .backend(backend)
+        .build()
+        .unwrap();
+    (r, last)
+}
+
+#[test]
+fn the_resident_image_read_on_request_equals_the_read_back_one() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("office").unwrap();
+    let camera = setup.camera.with_resolution((96, 72)).unwrap();
+    let (mut all, _) = renderer(&gpu, &setup, 256, ReadBack::All);
+    let (mut none, sampling) = renderer(&gpu, &setup, 256, ReadBack::Nothing);
+    for f in 0..3 {
+        let a = all.render(&setup.scene, &camera, f, 0.0).unwrap();
+        assert!(a.image.on_host() && a.gbuffer.on_host());
+        let before = gpu.traffic();
+        let n = none.render(&setup.scene, &camera, f, 0.0).unwrap();
+        let rest = (gpu.traffic() - before) - *sampling.lock().unwrap();
+        assert!(!n.image.on_host() && !n.gbuffer.on_host(), "frame {f} left the device");
+        assert_eq!(rest.bytes_down, 0, "frame {f}: the frame besides sampling read back {rest}");
+        let image = none.read_image().expect("an image");
+        assert_eq!((image.width, image.height), (96, 72));
+        assert!(image.data == a.image.data, "frame {f}: the resident image differs from the read-back one");
+        // The G-buffer it left is read back on request, and is the host one.
+        let g = none.backend().host_gbuffer(n.gbuffer.clone(), &setup.scene, &camera).unwrap();
+        assert!(g.samples == a.gbuffer.samples, "frame {f}: the G-buffer read on request differs");
+    }
+}
+
+#[test]
+fn a_steady_1080p_smc_frame_moves_little_besides_the_sampler() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("office").unwrap();
+    let camera = setup.camera.with_resolution((1920, 1080)).unwrap();
+    let (mut r, sampling) = renderer(&gpu, &setup, 2048, ReadBack::Nothing);
+    let mut frames = Vec::new();
+    // Frame 0 fills SMC's cells; frame 1 is a steady one.
+    for f in 0..2 {
+        let before = gpu.traffic();
+        let out = r.render(&setup.scene, &camera, f, 0.0).unwrap();
+        let t = gpu.traffic() - before;
+        let s = *sampling.lock().unwrap();
+        eprintln!("frame {f}: {t}; of which the sampler: {s}; {} VPLs moved; {:?}", out.moved, out.timings);
+        frames.push((t, s, out.image.on_host()));
+    }
+    for (f, &(t, s, on_host)) in frames.iter().enumerate().skip(1) {
+        assert!(!on_host, "frame {f} read its image back");
+        let rest = t - s;
+        assert_eq!(rest.bytes_down, 0, "frame {f}: the frame besides sampling read back {rest}");
+        assert!(rest.bytes_up <= 512 << 10, "frame {f}: the frame besides sampling moved {rest}");
+        assert!(rest.submissions <= 8, "frame {f}: the frame besides sampling took {rest}");
+    }
+    let before = gpu.traffic();
+    let image = r.read_image().expect("an image");
+    let t = gpu.traffic() - before;
+    assert_eq!((image.width, image.height, t.reads), (1920, 1080, 1));
+    assert_eq!(t.bytes_down, 1920 * 1080 * 16);
+}

@@ -68,12 +68,25 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The key the streams (seed, frame, purpose, ·) share: [`stream`] and
+/// [`stream_state`] of index i are [`keyed_state`]`(key, i)`'s, so a kernel
+/// given one key per (seed, frame, purpose) derives every index's stream
+/// itself.
+#[inline]
+pub fn stream_key(seed: u64, frame: u64, purpose: Purpose) -> u64 {
+    mix64(mix64(mix64(seed) ^ frame) ^ purpose.0.wrapping_mul(0xD1B5_4A32_D192_ED03))
+}
+
+/// rand_pcg's `Pcg32::new` arguments (state, stream) of index `index` under `key`.
+#[inline]
+fn keyed_seed(key: u64, index: u64) -> (u64, u64) {
+    (mix64(key ^ index), mix64(key.rotate_left(17) ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15)))
+}
+
 /// The stream for (seed, frame, purpose, index).
 #[inline]
 pub fn stream(seed: u64, frame: u64, purpose: Purpose, index: u64) -> RngStream {
-    let k = mix64(mix64(mix64(seed) ^ frame) ^ purpose.0.wrapping_mul(0xD1B5_4A32_D192_ED03));
-    let state = mix64(k ^ index);
-    let sequence = mix64(k.rotate_left(17) ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let (state, sequence) = keyed_seed(stream_key(seed, frame, purpose), index);
     RngStream { pcg: Pcg32::new(state, sequence) }
 }
 
@@ -82,9 +95,12 @@ pub fn stream(seed: u64, frame: u64, purpose: Purpose, index: u64) -> RngStream 
 /// stream elsewhere (a GPU): draw k outputs XSH RR of the state, then the
 /// state becomes state · 6364136223846793005 + increment (mod 2⁶⁴).
 pub fn stream_state(seed: u64, frame: u64, purpose: Purpose, index: u64) -> (u64, u64) {
-    let k = mix64(mix64(mix64(seed) ^ frame) ^ purpose.0.wrapping_mul(0xD1B5_4A32_D192_ED03));
-    let state = mix64(k ^ index);
-    let sequence = mix64(k.rotate_left(17) ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    keyed_state(stream_key(seed, frame, purpose), index)
+}
+
+/// [`stream_state`] of index `index` under a [`stream_key`].
+pub fn keyed_state(key: u64, index: u64) -> (u64, u64) {
+    let (state, sequence) = keyed_seed(key, index);
     // As rand_pcg's Pcg32::new: an odd increment, one step away from the seed.
     let increment = (sequence << 1) | 1;
     (state.wrapping_add(increment).wrapping_mul(PCG_MULTIPLIER).wrapping_add(increment), increment)

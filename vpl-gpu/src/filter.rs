@@ -2,7 +2,7 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::gbuffer::DeviceGBuffer;
-use crate::kernel::{Binding, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::kernel::{Binding, bind, dispatch, finish_read, layout, pipeline, storage, storage_init, uniform};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, Image};
 use vpl_shading::CrossBilateral;
@@ -84,8 +84,7 @@ impl GpuCrossBilateral {
         let kernel = FilterKernel::new(ctx);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         kernel.encode(ctx, &mut enc, &self.filter, &g, &b_in, &b_out);
-        finish(ctx, enc)?;
-        let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
+        let out: Vec<Vec4> = finish_read(ctx, enc, &b_out, n)?;
         Ok(Image { width: e.width, height: e.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
     }
 }

@@ -152,8 +152,21 @@ pub(crate) fn finish(ctx: &GpuContext, enc: wgpu::CommandEncoder) -> Result<(), 
 
 /// Copies the first `count` elements of `buffer` back to the host.
 pub(crate) fn read_back<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>, GpuError> {
+    finish_read(ctx, ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read-back") }), buffer, count)
+}
+
+/// Ends `enc` with a copy of the first `count` elements of `buffer` to the
+/// host, submits it and waits: the kernels `enc` recorded and their
+/// read-back cross in one submission and one wait.
+pub(crate) fn finish_read<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    mut enc: wgpu::CommandEncoder,
+    buffer: &wgpu::Buffer,
+    count: usize,
+) -> Result<Vec<T>, GpuError> {
     let size = (count * std::mem::size_of::<T>()) as u64;
     if size == 0 {
+        finish(ctx, enc)?;
         return Ok(Vec::new());
     }
     let d = &ctx.device;
@@ -163,7 +176,6 @@ pub(crate) fn read_back<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffe
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read-back") });
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
     ctx.submit([enc.finish()]);
     ctx.note_read(size);

@@ -3,11 +3,11 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::kernel::{Binding, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, scene_layout};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use vpl_core::glam::{Vec3, Vec4};
-use vpl_core::rng::stream_state;
+use vpl_core::rng::stream_key;
 use vpl_core::{Light, Purpose, RadiosityEstimator, Scene, SurfacePoint};
 use vpl_pathtrace::PathRadiosity;
 
@@ -24,7 +24,9 @@ struct Params {
     row: u32,
     /// Index of the environment light, `u32::MAX` without one.
     env: u32,
-    pad: [u32; 3],
+    /// `row` of the `sum` dispatch.
+    sum_row: u32,
+    pad: [u32; 2],
 }
 
 /// Vertices from which the CPU path tracer plays Russian roulette.
@@ -33,20 +35,64 @@ const RR_DEPTH: u32 = 5;
 /// [`PathRadiosity`] as a WGSL kernel: one invocation a (point, path), the
 /// same walk (next-event estimation with MIS, cosine-sampled bounces), and
 /// the same PCG32 stream per path as the CPU (`stream(seed, 0, RADIOSITY,
-/// path)`, run on 32-bit words), so an estimate differs from the CPU's only
-/// by float rounding and by rays that graze an edge. Batches come through
+/// path)`, derived on the device from one key a point and run on 32-bit
+/// words), so an estimate differs from the CPU's only by float rounding and
+/// by rays that graze an edge. Batches come through
 /// [`RadiosityEstimator::radiosity_many`].
+///
+/// A batch crosses as 56 B a point up (its surface point and stream key) and
+/// 16 B a point down (the sum of its paths, added on the device in path
+/// order as the CPU adds them), in one submission; the lights stay on the
+/// device until the scene's lights change.
 pub struct GpuRadiosity {
     gpu: Gpu,
     /// Paths and bounces, shared with the CPU twin.
     pub config: PathRadiosity,
-    kernel: OnceLock<(wgpu::BindGroupLayout, wgpu::ComputePipeline)>,
+    kernel: OnceLock<Kernels>,
+    lights: Mutex<Option<LightBuffers>>,
+}
+
+struct Kernels {
+    layout: wgpu::BindGroupLayout,
+    paths: wgpu::ComputePipeline,
+    sum: wgpu::ComputePipeline,
+}
+
+/// The lights as uploaded, with the host rows they were made from.
+struct LightBuffers {
+    rows: (Vec<Vec4>, Vec<f32>, Vec<f32>, Vec<u32>),
+    lights: wgpu::Buffer,
+    cdf: wgpu::Buffer,
+    pmf: wgpu::Buffer,
+    tri_light: wgpu::Buffer,
+}
+
+/// The lights of `scene` as the kernel reads them: four rows a light.
+fn light_rows(scene: &Scene) -> Vec<Vec4> {
+    scene
+        .lights
+        .iter()
+        .flat_map(|l| {
+            let head = |kind: u32, tri: u32, cos_total: f32| Vec4::new(f32::from_bits(kind), f32::from_bits(tri), cos_total, 0.0);
+            match *l {
+                Light::Area { triangle, radiance } => [head(0, triangle, 0.0), Vec4::ZERO, radiance.extend(0.0), Vec4::ZERO],
+                Light::Point { position, intensity } => [head(1, 0, 0.0), position.extend(0.0), intensity.extend(0.0), Vec4::ZERO],
+                Light::Spot { position, direction, intensity, cos_falloff_start, cos_total } => {
+                    [head(2, 0, cos_total), position.extend(0.0), intensity.extend(0.0), direction.extend(cos_falloff_start)]
+                }
+                Light::Directional { direction, irradiance } => {
+                    [head(3, 0, 0.0), direction.extend(0.0), irradiance.extend(0.0), Vec4::ZERO]
+                }
+                Light::Environment { sky } => [head(4, 0, 0.0), sky.zenith.extend(0.0), sky.horizon.extend(0.0), sky.nadir.extend(0.0)],
+            }
+        })
+        .collect()
 }
 
 impl GpuRadiosity {
     /// An estimator on `gpu` with `config`'s paths and bounces.
     pub fn new(gpu: Gpu, config: PathRadiosity) -> GpuRadiosity {
-        GpuRadiosity { gpu, config, kernel: OnceLock::new() }
+        GpuRadiosity { gpu, config, kernel: OnceLock::new(), lights: Mutex::new(None) }
     }
 
     /// L(y) of every (point, seed) pair.
@@ -57,44 +103,39 @@ impl GpuRadiosity {
         }
         let ctx = self.gpu.ctx();
         let gs = self.gpu.scene(scene)?;
-        let (layout, pipeline) = self.kernel.get_or_init(|| {
-            let r = Binding::Read;
-            let l = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, Binding::ReadWrite]);
+        let k = self.kernel.get_or_init(|| {
+            let (r, w) = (Binding::Read, Binding::ReadWrite);
+            let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
             let source = format!("{BVH_WGSL}\n{}", include_str!("radiosity.wgsl"));
-            let p = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &l]);
-            (l, p)
+            let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
+            let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
+            Kernels { layout, paths, sum }
         });
         let jobs: Vec<Vec4> =
             points.iter().flat_map(|(y, _)| [y.p.extend(f32::from_bits(y.material)), y.n.extend(0.0), y.ng.extend(0.0)]).collect();
-        let rng: Vec<[u32; 4]> = points
+        let keys: Vec<[u32; 2]> = points
             .iter()
-            .flat_map(|(_, seed)| {
-                (0..paths).map(move |i| {
-                    let (s, inc) = stream_state(*seed, 0, Purpose::RADIOSITY, i as u64);
-                    [s as u32, (s >> 32) as u32, inc as u32, (inc >> 32) as u32]
-                })
+            .map(|(_, seed)| {
+                let key = stream_key(*seed, 0, Purpose::RADIOSITY);
+                [key as u32, (key >> 32) as u32]
             })
             .collect();
-        let lights: Vec<Vec4> = scene
-            .lights
-            .iter()
-            .flat_map(|l| {
-                let head = |kind: u32, tri: u32, cos_total: f32| Vec4::new(f32::from_bits(kind), f32::from_bits(tri), cos_total, 0.0);
-                match *l {
-                    Light::Area { triangle, radiance } => [head(0, triangle, 0.0), Vec4::ZERO, radiance.extend(0.0), Vec4::ZERO],
-                    Light::Point { position, intensity } => [head(1, 0, 0.0), position.extend(0.0), intensity.extend(0.0), Vec4::ZERO],
-                    Light::Spot { position, direction, intensity, cos_falloff_start, cos_total } => {
-                        [head(2, 0, cos_total), position.extend(0.0), intensity.extend(0.0), direction.extend(cos_falloff_start)]
-                    }
-                    Light::Directional { direction, irradiance } => {
-                        [head(3, 0, 0.0), direction.extend(0.0), irradiance.extend(0.0), Vec4::ZERO]
-                    }
-                    Light::Environment { sky } => [head(4, 0, 0.0), sky.zenith.extend(0.0), sky.horizon.extend(0.0), sky.nadir.extend(0.0)],
-                }
-            })
-            .collect();
+        let mut cached = self.lights.lock().expect("light buffers lock");
+        let rows =
+            (light_rows(scene), scene.light_distribution.cdf().to_vec(), scene.light_distribution.pmfs().to_vec(), scene.tri_light.clone());
+        if cached.as_ref().is_none_or(|c| c.rows != rows) {
+            *cached = Some(LightBuffers {
+                lights: storage_init(ctx, "lights", &rows.0),
+                cdf: storage_init(ctx, "light cdf", &rows.1),
+                pmf: storage_init(ctx, "light pmf", &rows.2),
+                tri_light: storage_init(ctx, "tri light", &rows.3),
+                rows,
+            });
+        }
+        let lb = cached.as_ref().expect("light buffers just made");
         let n = points.len() as u64 * paths as u64;
         let groups = groups_1d(ctx, n, 64);
+        let sum_groups = groups_1d(ctx, points.len() as u64, 64);
         let params = Params {
             jobs: points.len() as u32,
             paths,
@@ -105,32 +146,22 @@ impl GpuRadiosity {
             eps: scene.epsilon(),
             row: groups.0 * 64,
             env: scene.environment.map_or(u32::MAX, |i| i as u32),
-            pad: [0; 3],
+            sum_row: sum_groups.0 * 64,
+            pad: [0; 2],
         };
         let b_params = uniform(ctx, "radiosity params", &params);
         let b_jobs = storage_init(ctx, "radiosity jobs", &jobs);
-        let b_rng = storage_init(ctx, "radiosity rng", &rng);
-        let b_lights = storage_init(ctx, "lights", &lights);
-        let b_cdf = storage_init(ctx, "light cdf", scene.light_distribution.cdf());
-        let b_pmf = storage_init(ctx, "light pmf", scene.light_distribution.pmfs());
-        let b_tri_light = storage_init(ctx, "tri light", &scene.tri_light);
-        let b_out = storage(ctx, "radiosity out", n * 16)?;
-        let group = bind(ctx, "radiosity", layout, &[&b_params, &b_jobs, &b_rng, &b_lights, &b_cdf, &b_pmf, &b_tri_light, &b_out]);
+        let b_keys = storage_init(ctx, "radiosity keys", &keys);
+        let b_out = storage(ctx, "radiosity paths", n * 16)?;
+        let b_sum = storage(ctx, "radiosity sums", points.len() as u64 * 16)?;
+        let group =
+            bind(ctx, "radiosity", &k.layout, &[&b_params, &b_jobs, &b_keys, &lb.lights, &lb.cdf, &lb.pmf, &lb.tri_light, &b_out, &b_sum]);
+        drop(cached);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, pipeline, &[&gs.group, &group], groups);
-        finish(ctx, enc)?;
-        let out: Vec<Vec4> = read_back(ctx, &b_out, n as usize)?;
-        // Summed in path order, as the CPU twin sums.
-        Ok(out
-            .chunks(paths as usize)
-            .map(|c| {
-                let mut sum = Vec3::ZERO;
-                for v in c {
-                    sum += v.truncate();
-                }
-                sum / paths as f32
-            })
-            .collect())
+        dispatch(&mut enc, &k.paths, &[&gs.group, &group], groups);
+        dispatch(&mut enc, &k.sum, &[&gs.group, &group], sum_groups);
+        let sums: Vec<Vec4> = finish_read(ctx, enc, &b_sum, points.len())?;
+        Ok(sums.into_iter().map(|s| s.truncate() / paths as f32).collect())
     }
 }
 

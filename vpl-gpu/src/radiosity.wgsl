@@ -2,10 +2,13 @@
 // estimation and MIS, twin of vpl_pathtrace::PathRadiosity (the walk of
 // PathTracer::reflected, min_k = 1, max_k = 1 + max_bounces, Russian
 // roulette from rr_depth vertices): one invocation a (point, path), the
-// same PCG32 streams as the CPU (initial states computed on the host).
+// same PCG32 streams as the CPU (vpl_core::rng::keyed_state of the point's
+// stream key and the path's index, computed here on 32-bit words).
+// Entry `sum` then adds each point's paths in path order, as the CPU twin
+// adds them, so only one sum a point crosses back to the host.
 //
 // jobs: three vec4 per point: [p, material], [n, two flags], [ng, -].
-// rng: per (point, path) the PCG32 state (lo, hi) and increment (lo, hi).
+// rng_key: per point the stream key (lo, hi) of its radiosity streams.
 // lights: four vec4 per light: [type (0 area, 1 point, 2 spot, 3 sun,
 //   4 environment), triangle, spot cos_total, -], [position or direction,
 //   or the sky's zenith, -], [radiance / intensity / irradiance, or the
@@ -24,19 +27,21 @@ struct Params {
     row: u32,
     // Index of the environment light, NONE without one.
     env: u32,
-    pad0: u32,
+    // `row` of the `sum` dispatch.
+    sum_row: u32,
     pad1: u32,
     pad2: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read> jobs: array<vec4<f32>>;
-@group(1) @binding(2) var<storage, read> rng_init: array<vec4<u32>>;
+@group(1) @binding(2) var<storage, read> rng_key: array<vec2<u32>>;
 @group(1) @binding(3) var<storage, read> lights: array<vec4<f32>>;
 @group(1) @binding(4) var<storage, read> light_cdf: array<f32>;
 @group(1) @binding(5) var<storage, read> light_pmf: array<f32>;
 @group(1) @binding(6) var<storage, read> tri_light: array<u32>;
 @group(1) @binding(7) var<storage, read_write> out_l: array<vec4<f32>>;
+@group(1) @binding(8) var<storage, read_write> out_sum: array<vec4<f32>>;
 
 const FRAC_1_PI: f32 = 0.31830987;
 const FRAC_PI_4: f32 = 0.7853982;
@@ -65,6 +70,38 @@ fn mul_add64(a: vec2<u32>, b: vec2<u32>, c: vec2<u32>) -> vec2<u32> {
     let lo = p.x + c.x;
     let carry = select(0u, 1u, lo < p.x);
     return vec2<u32>(lo, hi + c.y + carry);
+}
+
+fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+// a >> n for 0 < n < 32.
+fn shr64(a: vec2<u32>, n: u32) -> vec2<u32> {
+    return vec2<u32>((a.x >> n) | (a.y << (32u - n)), a.y >> n);
+}
+
+// SplitMix64's finaliser, vpl_core::rng::mix64.
+fn mix64(v: vec2<u32>) -> vec2<u32> {
+    let zero = vec2<u32>(0u);
+    var z = add64(v, vec2<u32>(0x7F4A7C15u, 0x9E3779B9u));
+    z = mul_add64(z ^ shr64(z, 30u), vec2<u32>(0x1CE4E5B9u, 0xBF58476Du), zero);
+    z = mul_add64(z ^ shr64(z, 27u), vec2<u32>(0x133111EBu, 0x94D049BBu), zero);
+    return z ^ shr64(z, 31u);
+}
+
+// vpl_core::rng::keyed_state: the PCG32 (state, increment) of stream
+// `index` under `key`.
+fn keyed_state(key: vec2<u32>, index: u32) -> vec4<u32> {
+    let zero = vec2<u32>(0u);
+    let state = mix64(key ^ vec2<u32>(index, 0u));
+    // key.rotate_left(17)
+    let rot = vec2<u32>((key.x << 17u) | (key.y >> 15u), (key.y << 17u) | (key.x >> 15u));
+    let sequence = mix64(rot ^ mul_add64(vec2<u32>(index, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u), zero));
+    let inc = vec2<u32>((sequence.x << 1u) | 1u, (sequence.y << 1u) | (sequence.x >> 31u));
+    let s = mul_add64(add64(state, inc), vec2<u32>(0x4C957F2Du, 0x5851F42Du), inc);
+    return vec4<u32>(s, inc);
 }
 
 var<private> rng_state: vec2<u32>;
@@ -326,7 +363,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let k_job = id.x + id.y * params.row;
     if (k_job >= params.jobs * params.paths) { return; }
     let job = k_job / params.paths;
-    let r = rng_init[k_job];
+    let r = keyed_state(rng_key[job], k_job - job * params.paths);
     rng_state = r.xy;
     rng_inc = r.zw;
     let a = jobs[3u * job];
@@ -415,4 +452,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         wo = -wi;
     }
     out_l[k_job] = vec4<f32>(l, 0.0);
+}
+
+// The sum of each point's paths, added in path order.
+@compute @workgroup_size(64)
+fn sum(@builtin(global_invocation_id) id: vec3<u32>) {
+    let job = id.x + id.y * params.sum_row;
+    if (job >= params.jobs) { return; }
+    var l = vec3<f32>(0.0);
+    for (var i = 0u; i < params.paths; i = i + 1u) {
+        l = l + out_l[job * params.paths + i].xyz;
+    }
+    out_sum[job] = vec4<f32>(l, 0.0);
 }

@@ -2,7 +2,7 @@
 //! and `Scene::occluded`.
 
 use crate::context::{GpuContext, GpuError};
-use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
+use crate::kernel::{Binding, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
 use vpl_core::Ray;
 use vpl_core::glam::Vec4;
@@ -50,8 +50,7 @@ impl GpuRayCaster {
         let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits]);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, if any { &self.any_hit } else { &self.closest }, &[&scene.group, &group], groups);
-        finish(ctx, enc)?;
-        read_back(ctx, &b_hits, rays.len())
+        finish_read(ctx, enc, &b_hits, rays.len())
     }
 
     /// Closest hit of each ray: (scene triangle, t), as `Scene::intersect`'s

@@ -83,6 +83,15 @@ pub trait RayCaster: Send + Sync {
     fn intersect(&self, scene: &Scene, rays: &[Ray]) -> Vec<Option<Hit>>;
     /// Whether each ray is blocked before its `t_max`, as [`Scene::occluded`].
     fn occluded(&self, scene: &Scene, rays: &[Ray]) -> Vec<bool>;
+    /// Whether a batch costs far more than its rays, so that a caller
+    /// trying candidates round by round (the first one a test passes wins)
+    /// should rather cast every round's rays in one batch and take the first
+    /// pass in round order: the same answers for more rays and one round
+    /// trip. True for casters on a device across a bus; false (the default)
+    /// where rays are cheap and batches free.
+    fn speculates(&self) -> bool {
+        false
+    }
 }
 
 /// [`RayCaster`] on the scene's own BVH, in parallel (rayon).

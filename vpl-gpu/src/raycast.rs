@@ -105,4 +105,9 @@ impl vpl_core::RayCaster for GpuRays {
         let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
         self.caster().occluded(self.gpu.ctx(), &gs, rays).unwrap_or_else(|e| panic!("GPU ray casting: {e}"))
     }
+
+    /// A batch is a submission and a wait: rounds are better cast together.
+    fn speculates(&self) -> bool {
+        true
+    }
 }

@@ -7,7 +7,9 @@
 //! for bit; only ties (a ray through a shared edge) may differ. Tolerances:
 //! at most 1 in 10⁴ of the sampler's rays differ, and the sampler takes the
 //! same decisions: the same VPL, bit for bit, in every slot of every frame
-//! of a camera walk (100 warm-up iterations, then four frames).
+//! of a camera walk (100 warm-up iterations, then four frames), with the
+//! GPU's rounds of visibility tests cast together (it speculates) and the
+//! CPU's one by one.
 
 mod common;
 
@@ -37,6 +39,10 @@ impl RayCaster for Both {
         n[2] += rays.len();
         n[3] += c.iter().zip(&g).filter(|(a, b)| a != b).count();
         g
+    }
+    /// As the GPU: rounds of tests cast together, against the CPU's rounds.
+    fn speculates(&self) -> bool {
+        self.0.speculates()
     }
 }
 

@@ -153,7 +153,7 @@
 //! still uses the paper's kNN intensities (eq. 6), so the set evolves as
 //! the paper's does.
 
-use crate::points::resolve;
+use crate::points::{first_passing, resolve};
 use rayon::prelude::*;
 use std::collections::{HashSet, VecDeque};
 use vpl_core::ParamError;
@@ -782,35 +782,29 @@ impl AreaProbes {
                 c > lo && c <= hi
             };
             // The nearest accepted site first (one query, usually the owner),
-            // then the next ones for the probes that do not see it.
+            // then the next ones for the probes that do not see it: in
+            // rounds, or in one batch when `rays` speculates (only the few
+            // that fail the first try, so that speculating costs few rays).
             let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
             let batches = &self.batches;
-            let first: Vec<Option<usize>> = open
+            let first: Vec<(usize, Vec<usize>)> = open
                 .par_iter()
-                .map(|&t| {
+                .filter_map(|&t| {
                     let q = &batches[todo[t].0][todo[t].1];
-                    tree.nearest_accepted(q.p, None, |i| accept(q, i)).map(|(i, _)| i)
+                    tree.nearest_accepted(q.p, None, |i| accept(q, i)).map(|(i, _)| (t, vec![i]))
                 })
                 .collect();
-            let tries: Vec<(usize, usize)> = open.iter().zip(first).filter_map(|(&t, c)| Some((t, c?))).collect();
-            cast += self.own_if_seen(scene, rays, sites, todo, &tries, &mut owner);
+            cast += self.own_first_seen(scene, rays, sites, todo, &first, &mut owner);
             let open: Vec<usize> = open.into_iter().filter(|&t| owner[t].is_none()).collect();
             let batches = &self.batches;
-            let more: Vec<Vec<usize>> = open
+            let more: Vec<(usize, Vec<usize>)> = open
                 .par_iter()
                 .map(|&t| {
                     let q = &batches[todo[t].0][todo[t].1];
-                    tree.nearest_accepted_n(q.p, None, |i| accept(q, i), OWNER_TRIES).into_iter().skip(1).map(|(i, _)| i).collect()
+                    (t, tree.nearest_accepted_n(q.p, None, |i| accept(q, i), OWNER_TRIES).into_iter().skip(1).map(|(i, _)| i).collect())
                 })
                 .collect();
-            for round in 0..OWNER_TRIES - 1 {
-                let tries: Vec<(usize, usize)> =
-                    open.iter().zip(&more).filter(|(t, m)| owner[**t].is_none() && m.len() > round).map(|(&t, m)| (t, m[round])).collect();
-                if tries.is_empty() {
-                    break;
-                }
-                cast += self.own_if_seen(scene, rays, sites, todo, &tries, &mut owner);
-            }
+            cast += self.own_first_seen(scene, rays, sites, todo, &more, &mut owner);
         }
         self.write_owners(live, todo, &owner);
         // The probes still without an owner try the VPLs whose cells hold
@@ -897,37 +891,41 @@ impl AreaProbes {
     ) -> (usize, usize) {
         let sites = live.sites;
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
-        let offers: Vec<Vec<usize>> = open.par_iter().map(|&t| self.neighbour_owners(live, todo[t], OWNER_TRIES)).collect();
-        let mut cast = 0;
-        for round in 0..OWNER_TRIES {
-            let tries: Vec<(usize, usize)> =
-                open.iter().zip(&offers).filter(|(t, m)| owner[**t].is_none() && m.len() > round).map(|(&t, m)| (t, m[round])).collect();
-            if tries.is_empty() {
-                break;
-            }
-            cast += self.own_if_seen(scene, rays, sites, todo, &tries, owner);
-        }
+        let offers: Vec<(usize, Vec<usize>)> = open.par_iter().map(|&t| (t, self.neighbour_owners(live, todo[t], OWNER_TRIES))).collect();
+        let cast = self.own_first_seen(scene, rays, sites, todo, &offers, owner);
         (open.iter().filter(|&&t| owner[t].is_some()).count(), cast)
     }
 
-    /// Probe `todo[t]` becomes site i's for each (t, i) of `tries` whose
-    /// two see each other. Returns the rays cast.
-    fn own_if_seen(
+    /// Probe `todo[t]` becomes the site of the first entry of its list, in
+    /// order, that it sees, for each (t, list) of `offers`
+    /// ([`first_passing`]: round by round, or in one batch when `rays`
+    /// speculates). Returns the rays the rounds cast.
+    fn own_first_seen(
         &self,
         scene: &Scene,
         rays: &dyn RayCaster,
         sites: &[Site],
         todo: &[(usize, usize)],
-        tries: &[(usize, usize)],
+        offers: &[(usize, Vec<usize>)],
         owner: &mut [Option<usize>],
     ) -> usize {
-        let (seen, cast) = self.see(scene, rays, sites, tries.iter().map(|&(t, i)| (todo[t], i)));
-        for (&(t, i), v) in tries.iter().zip(seen) {
-            if v {
-                owner[t] = Some(i);
+        let tests: Vec<Vec<Result<Ray, bool>>> =
+            offers.iter().map(|(t, list)| list.iter().map(|&i| self.shadow_test(scene, todo[*t], &sites[i])).collect()).collect();
+        let (taken, cast) = first_passing(scene, rays, &tests);
+        for ((t, list), r) in offers.iter().zip(taken) {
+            if let Some(r) = r {
+                owner[*t] = Some(list[r]);
             }
         }
         cast
+    }
+
+    /// The shadow ray between probe (batch, index) and site `s`, or whether
+    /// they see each other without one.
+    fn shadow_test(&self, scene: &Scene, (b, k): (usize, usize), s: &Site) -> Result<Ray, bool> {
+        let eps = scene.epsilon();
+        let q = self.batches[b][k];
+        scene.shadow_ray(q.p + q.n * eps, s.p + s.n * eps).ok_or(true)
     }
 
     /// Whether each probe (batch, index) and site see each other, and the
@@ -939,13 +937,7 @@ impl AreaProbes {
         sites: &[Site],
         pairs: impl Iterator<Item = ((usize, usize), usize)>,
     ) -> (Vec<bool>, usize) {
-        let eps = scene.epsilon();
-        let tests: Vec<Result<Ray, bool>> = pairs
-            .map(|((b, k), i)| {
-                let (q, s) = (self.batches[b][k], sites[i]);
-                scene.shadow_ray(q.p + q.n * eps, s.p + s.n * eps).ok_or(true)
-            })
-            .collect();
+        let tests: Vec<Result<Ray, bool>> = pairs.map(|(q, i)| self.shadow_test(scene, q, &sites[i])).collect();
         let cast = tests.iter().filter(|t| t.is_ok()).count();
         (resolve(scene, rays, tests), cast)
     }

@@ -136,3 +136,51 @@ pub fn resolve(scene: &Scene, rays: &dyn RayCaster, tests: Vec<Result<Ray, bool>
         })
         .collect()
 }
+
+/// Answers visibility tests tried in rounds: entry e tries `offers[e]` in
+/// order and takes the first that passes, trying the next only while the
+/// earlier ones failed. Returns, per entry, the index of the test it took
+/// (none when all failed), and the rays the round-by-round order casts.
+///
+/// Round by round (round r casts the r-th test of every entry still
+/// without one) casts only the rays needed, in as many batches as rounds.
+/// When `rays` [speculates](RayCaster::speculates), every round is cast in
+/// one batch and each entry takes its first pass in round order. A test's
+/// answer depends on its ray alone, so both give the same answers, and the
+/// count returned is the round-by-round one either way.
+pub fn first_passing(scene: &Scene, rays: &dyn RayCaster, offers: &[Vec<Result<Ray, bool>>]) -> (Vec<Option<usize>>, usize) {
+    let mut taken: Vec<Option<usize>> = vec![None; offers.len()];
+    let mut cast = 0;
+    if rays.speculates() {
+        let all: Vec<Result<Ray, bool>> = offers.iter().flatten().copied().collect();
+        let mut seen = resolve(scene, rays, all).into_iter();
+        for (e, offer) in offers.iter().enumerate() {
+            for (r, test) in offer.iter().enumerate() {
+                let passes = seen.next().expect("one answer per test");
+                if taken[e].is_some() {
+                    continue;
+                }
+                cast += test.is_ok() as usize;
+                if passes {
+                    taken[e] = Some(r);
+                }
+            }
+        }
+        return (taken, cast);
+    }
+    let rounds = offers.iter().map(Vec::len).max().unwrap_or(0);
+    for r in 0..rounds {
+        let open: Vec<usize> = (0..offers.len()).filter(|&e| taken[e].is_none() && offers[e].len() > r).collect();
+        if open.is_empty() {
+            break;
+        }
+        let tests: Vec<Result<Ray, bool>> = open.iter().map(|&e| offers[e][r]).collect();
+        cast += tests.iter().filter(|t| t.is_ok()).count();
+        for (e, passes) in open.into_iter().zip(resolve(scene, rays, tests)) {
+            if passes {
+                taken[e] = Some(r);
+            }
+        }
+    }
+    (taken, cast)
+}

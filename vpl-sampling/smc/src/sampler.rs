@@ -331,20 +331,30 @@ impl SmcSampler {
         let mut valid: Vec<bool> = camera_sees(scene, camera, rays, &anchors);
         st.mailbox_valid = valid.iter().filter(|v| **v).count();
         if !xs.is_empty() {
-            for round in 0..c.visibility_iterations {
+            // A caster that speculates casts every round in one batch: a
+            // slot's draws in round r come from its own stream (slot, r), so
+            // the first that sees the VPL, in round order, is the same.
+            let (rounds, per_batch) = if rays.speculates() { (1, c.visibility_iterations) } else { (c.visibility_iterations, 1) };
+            for batch in 0..rounds {
                 let unverified: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some() && !valid[s]).collect();
                 if unverified.is_empty() {
                     break;
                 }
-                // Up to visibility_rays camera points per unverified VPL, all
-                // drawn first; the first that sees the VPL becomes its mailbox.
+                // Up to visibility_rays camera points per unverified VPL and
+                // round, all drawn first; the first that sees the VPL
+                // becomes its mailbox.
                 let particles = &self.particles;
                 let tries: Vec<(usize, CameraPoint, Result<vpl_core::Ray, bool>)> = unverified
                     .par_iter()
                     .flat_map_iter(|&s| {
                         let p = particles[s].expect("unverified slots hold a VPL");
-                        let mut rng = stream(seed, it, Purpose::INDIRECT_VISIBILITY, (s as u64) << 8 | round as u64);
-                        let draws: Vec<CameraPoint> = (0..c.visibility_rays).map(|_| xs[rng.below(xs.len() as u32) as usize]).collect();
+                        let draws: Vec<CameraPoint> = (batch * per_batch..(batch + 1) * per_batch)
+                            .flat_map(|round| {
+                                let mut rng = stream(seed, it, Purpose::INDIRECT_VISIBILITY, (s as u64) << 8 | round as u64);
+                                (0..c.visibility_rays).map(move |_| rng.below(xs.len() as u32) as usize).collect::<Vec<_>>()
+                            })
+                            .map(|j| xs[j])
+                            .collect();
                         draws.into_iter().map(move |x| (s, x, mutual_ray(scene, &x, p.y.p, p.y.n)))
                     })
                     .collect();

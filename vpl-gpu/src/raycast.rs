@@ -30,13 +30,15 @@ impl GpuRayCaster {
     /// Compiles the kernels.
     pub fn new(ctx: &GpuContext) -> GpuRayCaster {
         let scene = scene_layout(ctx);
-        let layout = layout(ctx, "raycast", &[Binding::Uniform, Binding::Read, Binding::ReadWrite]);
+        let layout = layout(ctx, "raycast", &[Binding::Uniform, Binding::Read, Binding::ReadWrite, Binding::ReadWrite]);
         let source = format!("{BVH_WGSL}\n{}", include_str!("raycast.wgsl"));
         let closest = pipeline(ctx, "closest", &source, "closest", &[&scene, &layout]);
         let any_hit = pipeline(ctx, "any_hit", &source, "any_hit", &[&scene, &layout]);
         GpuRayCaster { layout, closest, any_hit }
     }
 
+    /// Casts `rays`: closest hits as (t bits, triangle) pairs, or (`any`)
+    /// occlusion as one bit a ray in words of 32.
     fn run(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray], any: bool) -> Result<Vec<[u32; 2]>, GpuError> {
         if rays.is_empty() {
             return Ok(Vec::new());
@@ -46,11 +48,19 @@ impl GpuRayCaster {
         let params = Params { count: rays.len() as u32, row: groups.0 * WORKGROUP, pad: [0; 2] };
         let b_params = uniform(ctx, "raycast params", &params);
         let b_rays = storage_init(ctx, "rays", &data);
-        let b_hits = storage(ctx, "hits", rays.len() as u64 * 8)?;
-        let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits]);
+        let words = rays.len().div_ceil(32);
+        // New buffers start zeroed: the occlusion bits are set, never cleared.
+        let b_hits = storage(ctx, "hits", if any { 16 } else { rays.len() as u64 * 8 })?;
+        let b_blocked = storage(ctx, "blocked", if any { words as u64 * 4 } else { 16 })?;
+        let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits, &b_blocked]);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, if any { &self.any_hit } else { &self.closest }, &[&scene.group, &group], groups);
-        finish_read(ctx, enc, &b_hits, rays.len())
+        if any {
+            let bits: Vec<u32> = finish_read(ctx, enc, &b_blocked, words)?;
+            Ok((0..rays.len()).map(|i| [bits[i / 32] >> (i % 32) & 1, 0]).collect())
+        } else {
+            finish_read(ctx, enc, &b_hits, rays.len())
+        }
     }
 
     /// Closest hit of each ray: (scene triangle, t), as `Scene::intersect`'s

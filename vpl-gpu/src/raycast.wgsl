@@ -1,6 +1,7 @@
 // Batch ray casting: one invocation a ray. Rays are two vec4 each:
 // [origin, t_max], [direction, -]. Closest hits come back as
-// (t, scene triangle) pairs, occlusion as 0/1.
+// (t, scene triangle) pairs, occlusion as one bit a ray (bit i % 32 of
+// word i / 32), so an occlusion batch reads back n / 8 bytes.
 
 struct Params {
     count: u32,
@@ -12,6 +13,7 @@ struct Params {
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read> rays: array<vec4<f32>>;
 @group(1) @binding(2) var<storage, read_write> hits: array<vec2<u32>>;
+@group(1) @binding(3) var<storage, read_write> blocked: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
 fn closest(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -33,5 +35,7 @@ fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
     if (i >= params.count) { return; }
     let a = rays[2u * i];
     let b = rays[2u * i + 1u];
-    hits[i] = vec2<u32>(select(0u, 1u, occluded(a.xyz, b.xyz, a.w)), 0u);
+    if (occluded(a.xyz, b.xyz, a.w)) {
+        atomicOr(&blocked[i / 32u], 1u << (i % 32u));
+    }
 }

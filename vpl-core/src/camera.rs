@@ -9,6 +9,7 @@ use crate::error::{CoreError, Result};
 use crate::ray::Ray;
 use crate::sampling::concentric_disk;
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Largest image side accepted (keeps a typo in a scene file from allocating terabytes).
 pub const MAX_RESOLUTION: u32 = 16384;
@@ -195,6 +196,38 @@ impl Camera {
         let y = v.dot(self.true_up) / (z * self.sy);
         let (w, h) = (self.resolution.0 as f32, self.resolution.1 as f32);
         Some(((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h))
+    }
+}
+
+/// `count` rays of a camera through uniformly random raster positions:
+/// ray j draws (u, v) and then the lens sample from stream j under `key`
+/// ([`keyed_stream`](crate::rng::keyed_stream)) and is
+/// `camera.ray(u·w, v·h, lens)`. The rays are made on the host; a
+/// [`RayCaster`](crate::RayCaster) on a device may make them there instead
+/// of moving them ([`RayCaster::intersect_camera`](crate::RayCaster::intersect_camera)).
+#[derive(Clone, Debug)]
+pub struct CameraRays<'a> {
+    /// The camera.
+    pub camera: &'a Camera,
+    /// The key of the rays' streams.
+    pub key: u64,
+    /// The rays, in order.
+    pub rays: Vec<Ray>,
+}
+
+impl<'a> CameraRays<'a> {
+    /// The `count` rays of `camera` under `key`, made in parallel.
+    pub fn new(camera: &'a Camera, key: u64, count: usize) -> CameraRays<'a> {
+        let rays = (0..count).into_par_iter().map(|j| Self::ray(camera, key, j as u64)).collect();
+        CameraRays { camera, key, rays }
+    }
+
+    /// Ray `j` of `camera` under `key`.
+    pub fn ray(camera: &Camera, key: u64, j: u64) -> Ray {
+        let (w, h) = (camera.resolution.0 as f32, camera.resolution.1 as f32);
+        let mut rng = crate::rng::keyed_stream(key, j);
+        let (u, v) = rng.next_2d();
+        camera.ray(u * w, v * h, rng.next_2d())
     }
 }
 

@@ -86,7 +86,14 @@ fn keyed_seed(key: u64, index: u64) -> (u64, u64) {
 /// The stream for (seed, frame, purpose, index).
 #[inline]
 pub fn stream(seed: u64, frame: u64, purpose: Purpose, index: u64) -> RngStream {
-    let (state, sequence) = keyed_seed(stream_key(seed, frame, purpose), index);
+    keyed_stream(stream_key(seed, frame, purpose), index)
+}
+
+/// Stream `index` under a [`stream_key`]: `stream(seed, frame, purpose, i)`
+/// is `keyed_stream(stream_key(seed, frame, purpose), i)`.
+#[inline]
+pub fn keyed_stream(key: u64, index: u64) -> RngStream {
+    let (state, sequence) = keyed_seed(key, index);
     RngStream { pcg: Pcg32::new(state, sequence) }
 }
 

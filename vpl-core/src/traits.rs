@@ -3,6 +3,7 @@
 //! into indirect light, and radiosity estimators give L(y) to the samplers
 //! that need it.
 
+use crate::camera::CameraRays;
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, Receivers};
 use crate::image::Image;
@@ -83,6 +84,15 @@ pub trait RayCaster: Send + Sync {
     fn intersect(&self, scene: &Scene, rays: &[Ray]) -> Vec<Option<Hit>>;
     /// Whether each ray is blocked before its `t_max`, as [`Scene::occluded`].
     fn occluded(&self, scene: &Scene, rays: &[Ray]) -> Vec<bool>;
+    /// The closest hits of `batch`'s camera rays, as
+    /// [`intersect`](RayCaster::intersect)`(scene, &batch.rays)`. A caster
+    /// on a device may make the rays there from the camera and the key
+    /// (moving a few bytes instead of 32 a ray); the hits are then completed
+    /// with the host's rays, so they differ from the default's only where a
+    /// ray grazes an edge.
+    fn intersect_camera(&self, scene: &Scene, batch: &CameraRays) -> Vec<Option<Hit>> {
+        self.intersect(scene, &batch.rays)
+    }
     /// Whether a batch costs far more than its rays, so that a caller
     /// trying candidates round by round (the first one a test passes wins)
     /// should rather cast every round's rays in one batch and take the first

@@ -4,6 +4,10 @@
 use crate::context::{GpuContext, GpuError};
 use wgpu::util::DeviceExt;
 
+/// WGSL of the PCG32 streams and samplings kernels draw with, prepended to
+/// the kernels that draw.
+pub(crate) const SAMPLING_WGSL: &str = include_str!("sampling.wgsl");
+
 /// How a kernel binds one buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Binding {

@@ -3,7 +3,7 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{Binding, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
+use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, scene_layout};
 use std::sync::{Mutex, OnceLock};
 use vpl_core::glam::{Vec3, Vec4};
@@ -106,7 +106,7 @@ impl GpuRadiosity {
         let k = self.kernel.get_or_init(|| {
             let (r, w) = (Binding::Read, Binding::ReadWrite);
             let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
-            let source = format!("{BVH_WGSL}\n{}", include_str!("radiosity.wgsl"));
+            let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}", include_str!("radiosity.wgsl"));
             let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
             let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
             Kernels { layout, paths, sum }

@@ -3,8 +3,9 @@
 
 use rayon::prelude::*;
 use vpl_core::glam::Vec3;
+use vpl_core::rng::stream_key;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{Camera, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint, stream};
+use vpl_core::{Camera, CameraRays, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint, stream};
 
 /// A camera-visible point that can reflect VPL light toward the camera,
 /// normals turned toward the camera.
@@ -32,17 +33,10 @@ pub struct CandidateHit {
 /// hits that reflect light toward the camera, in ray order. Ray j draws from
 /// stream (seed, iteration, CAMERA_POINTS, j); `rays` casts them.
 pub fn camera_points(scene: &Scene, camera: &Camera, rays: &dyn RayCaster, n: usize, seed: u64, iteration: u64) -> Vec<CameraPoint> {
-    let (w, h) = (camera.resolution.0 as f32, camera.resolution.1 as f32);
-    let batch: Vec<Ray> = (0..n)
-        .into_par_iter()
-        .map(|j| {
-            let mut rng = stream(seed, iteration, Purpose::CAMERA_POINTS, j as u64);
-            let (u, v) = rng.next_2d();
-            camera.ray(u * w, v * h, rng.next_2d())
-        })
-        .collect();
-    let hits = rays.intersect(scene, &batch);
+    let batch = CameraRays::new(camera, stream_key(seed, iteration, Purpose::CAMERA_POINTS), n);
+    let hits = rays.intersect_camera(scene, &batch);
     batch
+        .rays
         .iter()
         .zip(hits)
         .filter_map(|(ray, hit)| {

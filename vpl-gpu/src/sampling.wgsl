@@ -1,0 +1,108 @@
+// What kernels draw with: PCG32 on 32-bit words, the same streams as
+// vpl_core::rng (keyed_state of a stream key and an index), and the
+// samplings of vpl_core::sampling that need no more than that.
+
+const FRAC_PI_4: f32 = 0.7853982;
+
+// ---- PCG32 on 32-bit words ----
+
+// The full 64-bit product of two 32-bit words as (lo, hi).
+fn mul_wide(a: u32, b: u32) -> vec2<u32> {
+    let a0 = a & 0xffffu;
+    let a1 = a >> 16u;
+    let b0 = b & 0xffffu;
+    let b1 = b >> 16u;
+    let p00 = a0 * b0;
+    let p01 = a0 * b1;
+    let p10 = a1 * b0;
+    let p11 = a1 * b1;
+    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
+    return vec2<u32>((p00 & 0xffffu) | (mid << 16u), p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u));
+}
+
+// a * b + c mod 2^64, each (lo, hi).
+fn mul_add64(a: vec2<u32>, b: vec2<u32>, c: vec2<u32>) -> vec2<u32> {
+    let p = mul_wide(a.x, b.x);
+    let hi = p.y + a.x * b.y + a.y * b.x;
+    let lo = p.x + c.x;
+    let carry = select(0u, 1u, lo < p.x);
+    return vec2<u32>(lo, hi + c.y + carry);
+}
+
+fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+// a >> n for 0 < n < 32.
+fn shr64(a: vec2<u32>, n: u32) -> vec2<u32> {
+    return vec2<u32>((a.x >> n) | (a.y << (32u - n)), a.y >> n);
+}
+
+// SplitMix64's finaliser, vpl_core::rng::mix64.
+fn mix64(v: vec2<u32>) -> vec2<u32> {
+    let zero = vec2<u32>(0u);
+    var z = add64(v, vec2<u32>(0x7F4A7C15u, 0x9E3779B9u));
+    z = mul_add64(z ^ shr64(z, 30u), vec2<u32>(0x1CE4E5B9u, 0xBF58476Du), zero);
+    z = mul_add64(z ^ shr64(z, 27u), vec2<u32>(0x133111EBu, 0x94D049BBu), zero);
+    return z ^ shr64(z, 31u);
+}
+
+// vpl_core::rng::keyed_state: the PCG32 (state, increment) of stream
+// `index` under `key`.
+fn keyed_state(key: vec2<u32>, index: u32) -> vec4<u32> {
+    let zero = vec2<u32>(0u);
+    let state = mix64(key ^ vec2<u32>(index, 0u));
+    // key.rotate_left(17)
+    let rot = vec2<u32>((key.x << 17u) | (key.y >> 15u), (key.y << 17u) | (key.x >> 15u));
+    let sequence = mix64(rot ^ mul_add64(vec2<u32>(index, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u), zero));
+    let inc = vec2<u32>((sequence.x << 1u) | 1u, (sequence.y << 1u) | (sequence.x >> 31u));
+    let s = mul_add64(add64(state, inc), vec2<u32>(0x4C957F2Du, 0x5851F42Du), inc);
+    return vec4<u32>(s, inc);
+}
+
+var<private> rng_state: vec2<u32>;
+var<private> rng_inc: vec2<u32>;
+
+fn next_u32() -> u32 {
+    let s = rng_state;
+    // 6364136223846793005 = 0x5851F42D_4C957F2D
+    rng_state = mul_add64(s, vec2<u32>(0x4C957F2Du, 0x5851F42Du), rng_inc);
+    let rot = s.y >> 27u;
+    // ((s >> 18) ^ s) >> 27, low 32 bits
+    let t_lo = ((s.x >> 18u) | (s.y << 14u)) ^ s.x;
+    let t_hi = (s.y >> 18u) ^ s.y;
+    let xsh = (t_lo >> 27u) | (t_hi << 5u);
+    return (xsh >> rot) | (xsh << ((32u - rot) & 31u));
+}
+
+fn next_f32() -> f32 {
+    return f32(next_u32() >> 8u) * (1.0 / 16777216.0);
+}
+
+// ---- sampling (vpl_core::sampling) ----
+
+// (cos x, sin x) for |x| <= pi/4 by Taylor polynomials (errors below
+// 2e-9): the shading language's cos and sin may be off by 2^-11 (Vulkan's
+// bound), enough to move a long ray across an edge.
+fn cos_sin(x: f32) -> vec2<f32> {
+    let x2 = x * x;
+    let c = 1.0 + x2 * (-1.0 / 2.0 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    let s = x * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0)))));
+    return vec2<f32>(c, s);
+}
+
+// Shirley-Chiu concentric mapping (vpl_core::sampling::concentric_disk);
+// cos(pi/2 - t) = sin t keeps every angle within pi/4.
+fn concentric_disk(u: f32, v: f32) -> vec2<f32> {
+    let a = 2.0 * u - 1.0;
+    let b = 2.0 * v - 1.0;
+    if (a == 0.0 && b == 0.0) { return vec2<f32>(0.0); }
+    if (abs(a) > abs(b)) {
+        let cs = cos_sin(FRAC_PI_4 * (b / a));
+        return vec2<f32>(a * cs.x, a * cs.y);
+    }
+    let cs = cos_sin(FRAC_PI_4 * (a / b));
+    return vec2<f32>(b * cs.y, b * cs.x);
+}
+

@@ -334,13 +334,18 @@ impl Scene {
         self.geometry.bvh.closest_fan(o, dirs, f32::INFINITY, out)
     }
 
-    /// The hit of `ray` with triangle `tri`, found elsewhere at about
-    /// `t` (a GPU): t is recomputed by the CPU BVH's triangle test, so the
-    /// hit is the one [`Scene::intersect`] reports whenever both found the
-    /// same triangle; `t` stays where that test misses (an edge, by rounding).
+    /// The hit of `ray` with triangle `tri`, found elsewhere (a GPU) without
+    /// its t: t by the CPU BVH's triangle test, so the hit is the one
+    /// [`Scene::intersect`] reports whenever both found the same triangle;
+    /// where that test misses (the ray grazes an edge, by rounding), where
+    /// the ray meets the triangle's plane.
     #[inline]
-    pub fn hit_near(&self, ray: &Ray, tri: u32, t: f32) -> Hit {
-        let t = self.geometry.bvh.triangle_t(ray, tri).unwrap_or(t);
+    pub fn hit_on(&self, ray: &Ray, tri: u32) -> Hit {
+        let t = self.geometry.bvh.triangle_t(ray, tri).unwrap_or_else(|| {
+            let td = &self.geometry.triangles[tri as usize];
+            let t = (td.p0 - ray.o).dot(td.ng) / ray.d.dot(td.ng);
+            if t.is_finite() && t >= 0.0 { t.min(ray.t_max) } else { 0.0 }
+        });
         self.hit_at(ray, tri, t)
     }
 

@@ -1,13 +1,18 @@
 // Camera rays made on the device and cast: twin of vpl_core::CameraRays.
 // Ray j draws (u, v) and then the lens sample from stream j under the key,
 // and is the camera's ray through raster (u·w, v·h) (vpl_core::Camera::ray).
-// Closest hits come back as (t, scene triangle) pairs, as raycast.wgsl's.
+// Closest hits come back as (t, scene triangle) pairs, or (`tri_only`) as
+// the triangle alone, as raycast.wgsl's.
 
 struct Params {
     count: u32,
     row: u32,
     key_lo: u32,
     key_hi: u32,
+    tri_only: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
     origin: vec4<f32>,
     // xyz and, in w: s_x (forward), s_y (right), focus distance (up).
     forward: vec4<f32>,
@@ -18,7 +23,7 @@ struct Params {
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
-@group(1) @binding(1) var<storage, read_write> hits: array<vec2<u32>>;
+@group(1) @binding(1) var<storage, read_write> hits: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -46,9 +51,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         dir = normalize(focus - o);
     }
     let hit = closest_hit(o, dir, NO_HIT);
-    if (hit.prim == NONE) {
-        hits[j] = vec2<u32>(bitcast<u32>(NO_HIT), NONE);
+    var t = NO_HIT;
+    var tri = NONE;
+    if (hit.prim != NONE) {
+        t = hit.t;
+        tri = bvh_order[hit.prim];
+    }
+    if (params.tri_only != 0u) {
+        hits[j] = tri;
     } else {
-        hits[j] = vec2<u32>(bitcast<u32>(hit.t), bvh_order[hit.prim]);
+        hits[2u * j] = bitcast<u32>(t);
+        hits[2u * j + 1u] = tri;
     }
 }

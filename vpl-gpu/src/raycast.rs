@@ -4,7 +4,6 @@
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
-use vpl_core::glam::Vec4;
 use vpl_core::{Camera, Ray};
 
 #[repr(C)]
@@ -12,7 +11,8 @@ use vpl_core::{Camera, Ray};
 struct Params {
     count: u32,
     row: u32,
-    pad: [u32; 2],
+    stride: u32,
+    tri_only: u32,
 }
 
 #[repr(C)]
@@ -21,6 +21,8 @@ struct CameraParams {
     count: u32,
     row: u32,
     key: [u32; 2],
+    tri_only: u32,
+    pad: [u32; 3],
     origin: [f32; 4],
     forward: [f32; 4],
     right: [f32; 4],
@@ -30,9 +32,34 @@ struct CameraParams {
 
 const WORKGROUP: u32 = 64;
 
+/// What a batch brings back.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Answer {
+    /// (t bits, triangle) a ray.
+    Hits,
+    /// The triangle a ray.
+    Triangles,
+    /// One bit a ray, in words of 32.
+    Occlusion,
+}
+
+/// Closest hits as the kernels write them (`u32::MAX`: a miss).
+fn hits_of(words: Vec<u32>) -> Vec<Option<(u32, f32)>> {
+    words.chunks_exact(2).map(|w| (w[1] != u32::MAX).then(|| (w[1], f32::from_bits(w[0])))).collect()
+}
+
+/// Triangles as the kernels write them.
+fn triangles_of(words: Vec<u32>) -> Vec<Option<u32>> {
+    words.into_iter().map(|t| (t != u32::MAX).then_some(t)).collect()
+}
+
 /// Casts batches of rays against a [`GpuScene`]: closest hits as
-/// (scene triangle, t), occlusion as booleans, with the CPU BVH's
-/// conventions (hits in [0, t_max]).
+/// (scene triangle, t) or the triangle alone, occlusion as booleans, with
+/// the CPU BVH's conventions (hits in [0, t_max]).
+///
+/// A ray goes up as 24 B (origin, direction) in a batch of unbounded rays,
+/// else 28 B (and t_max); a hit comes back as 8 B, a triangle as 4 B, an
+/// occlusion answer as one bit.
 pub struct GpuRayCaster {
     layout: wgpu::BindGroupLayout,
     closest: wgpu::ComputePipeline,
@@ -55,30 +82,80 @@ impl GpuRayCaster {
         GpuRayCaster { layout, closest, any_hit, camera_layout, camera }
     }
 
-    /// Casts `rays`: closest hits as (t bits, triangle) pairs, or (`any`)
-    /// occlusion as one bit a ray in words of 32.
-    fn run(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray], any: bool) -> Result<Vec<[u32; 2]>, GpuError> {
+    /// Casts `rays` and reads back the words of `answer`.
+    fn run(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray], answer: Answer) -> Result<Vec<u32>, GpuError> {
         if rays.is_empty() {
             return Ok(Vec::new());
         }
-        let data: Vec<Vec4> = rays.iter().flat_map(|r| [r.o.extend(r.t_max.min(3.0e38)), r.d.extend(0.0)]).collect();
+        // t_max travels only in a batch that has one.
+        let unbounded = rays.iter().all(|r| r.t_max >= 3.0e38);
+        let stride = if unbounded { 6 } else { 7 };
+        let data: Vec<f32> = rays
+            .iter()
+            .flat_map(|r| {
+                let v = [r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.t_max.min(3.0e38)];
+                v.into_iter().take(stride)
+            })
+            .collect();
         let groups = groups_1d(ctx, rays.len() as u64, WORKGROUP);
-        let params = Params { count: rays.len() as u32, row: groups.0 * WORKGROUP, pad: [0; 2] };
+        let n = rays.len();
+        let params =
+            Params { count: n as u32, row: groups.0 * WORKGROUP, stride: stride as u32, tri_only: (answer == Answer::Triangles) as u32 };
         let b_params = uniform(ctx, "raycast params", &params);
         let b_rays = storage_init(ctx, "rays", &data);
-        let words = rays.len().div_ceil(32);
+        let words = match answer {
+            Answer::Hits => 2 * n,
+            Answer::Triangles => n,
+            Answer::Occlusion => n.div_ceil(32),
+        };
         // New buffers start zeroed: the occlusion bits are set, never cleared.
-        let b_hits = storage(ctx, "hits", if any { 16 } else { rays.len() as u64 * 8 })?;
-        let b_blocked = storage(ctx, "blocked", if any { words as u64 * 4 } else { 16 })?;
+        let (hits_size, blocked_size) = if answer == Answer::Occlusion { (16, words as u64 * 4) } else { (words as u64 * 4, 16) };
+        let b_hits = storage(ctx, "hits", hits_size)?;
+        let b_blocked = storage(ctx, "blocked", blocked_size)?;
         let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits, &b_blocked]);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, if any { &self.any_hit } else { &self.closest }, &[&scene.group, &group], groups);
-        if any {
-            let bits: Vec<u32> = finish_read(ctx, enc, &b_blocked, words)?;
-            Ok((0..rays.len()).map(|i| [bits[i / 32] >> (i % 32) & 1, 0]).collect())
-        } else {
-            finish_read(ctx, enc, &b_hits, rays.len())
+        let kernel = if answer == Answer::Occlusion { &self.any_hit } else { &self.closest };
+        dispatch(&mut enc, kernel, &[&scene.group, &group], groups);
+        finish_read(ctx, enc, if answer == Answer::Occlusion { &b_blocked } else { &b_hits }, words)
+    }
+
+    /// Makes the `count` camera rays of `camera` under `key` on the device,
+    /// casts them and reads back the words of `answer`.
+    fn run_camera(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &Camera,
+        key: u64,
+        count: usize,
+        answer: Answer,
+    ) -> Result<Vec<u32>, GpuError> {
+        if count == 0 {
+            return Ok(Vec::new());
         }
+        let groups = groups_1d(ctx, count as u64, WORKGROUP);
+        let (f, right, up, sx, sy) = camera.raster_basis();
+        let (w, h) = camera.resolution;
+        let tri_only = answer == Answer::Triangles;
+        let params = CameraParams {
+            count: count as u32,
+            row: groups.0 * WORKGROUP,
+            key: [key as u32, (key >> 32) as u32],
+            tri_only: tri_only as u32,
+            pad: [0; 3],
+            origin: camera.origin.extend(0.0).into(),
+            forward: f.extend(sx).into(),
+            right: right.extend(sy).into(),
+            up: up.extend(camera.focus_distance).into(),
+            raster: [w as f32, h as f32, camera.lens_radius.max(0.0), 0.0],
+        };
+        let words = if tri_only { count } else { 2 * count };
+        let b_params = uniform(ctx, "camera rays params", &params);
+        let b_hits = storage(ctx, "camera hits", words as u64 * 4)?;
+        let group = bind(ctx, "camera rays", &self.camera_layout, &[&b_params, &b_hits]);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        dispatch(&mut enc, &self.camera, &[&scene.group, &group], groups);
+        finish_read(ctx, enc, &b_hits, words)
     }
 
     /// Closest hits of the `count` camera rays of `camera` under `key`
@@ -92,48 +169,45 @@ impl GpuRayCaster {
         key: u64,
         count: usize,
     ) -> Result<Vec<Option<(u32, f32)>>, GpuError> {
-        if count == 0 {
-            return Ok(Vec::new());
-        }
-        let groups = groups_1d(ctx, count as u64, WORKGROUP);
-        let (f, right, up, sx, sy) = camera.raster_basis();
-        let (w, h) = camera.resolution;
-        let params = CameraParams {
-            count: count as u32,
-            row: groups.0 * WORKGROUP,
-            key: [key as u32, (key >> 32) as u32],
-            origin: camera.origin.extend(0.0).into(),
-            forward: f.extend(sx).into(),
-            right: right.extend(sy).into(),
-            up: up.extend(camera.focus_distance).into(),
-            raster: [w as f32, h as f32, camera.lens_radius.max(0.0), 0.0],
-        };
-        let b_params = uniform(ctx, "camera rays params", &params);
-        let b_hits = storage(ctx, "camera hits", count as u64 * 8)?;
-        let group = bind(ctx, "camera rays", &self.camera_layout, &[&b_params, &b_hits]);
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, &self.camera, &[&scene.group, &group], groups);
-        let hits: Vec<[u32; 2]> = finish_read(ctx, enc, &b_hits, count)?;
-        Ok(hits.into_iter().map(|[t, tri]| (tri != u32::MAX).then(|| (tri, f32::from_bits(t)))).collect())
+        Ok(hits_of(self.run_camera(ctx, scene, camera, key, count, Answer::Hits)?))
+    }
+
+    /// The triangles [`GpuRayCaster::closest_camera`] finds, alone (4 B a ray).
+    pub fn camera_triangles(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &Camera,
+        key: u64,
+        count: usize,
+    ) -> Result<Vec<Option<u32>>, GpuError> {
+        Ok(triangles_of(self.run_camera(ctx, scene, camera, key, count, Answer::Triangles)?))
     }
 
     /// Closest hit of each ray: (scene triangle, t), as `Scene::intersect`'s
     /// triangle and `Hit::t`.
     pub fn closest(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<Option<(u32, f32)>>, GpuError> {
-        Ok(self.run(ctx, scene, rays, false)?.into_iter().map(|[t, tri]| (tri != u32::MAX).then(|| (tri, f32::from_bits(t)))).collect())
+        Ok(hits_of(self.run(ctx, scene, rays, Answer::Hits)?))
+    }
+
+    /// The triangle of each ray's closest hit, alone (4 B a ray).
+    pub fn closest_triangles(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<Option<u32>>, GpuError> {
+        Ok(triangles_of(self.run(ctx, scene, rays, Answer::Triangles)?))
     }
 
     /// Whether each ray meets a surface within its `t_max`, as `Scene::occluded`.
     pub fn occluded(&self, ctx: &GpuContext, scene: &GpuScene, rays: &[Ray]) -> Result<Vec<bool>, GpuError> {
-        Ok(self.run(ctx, scene, rays, true)?.into_iter().map(|[o, _]| o != 0).collect())
+        let bits = self.run(ctx, scene, rays, Answer::Occlusion)?;
+        Ok((0..rays.len()).map(|i| bits[i / 32] >> (i % 32) & 1 != 0).collect())
     }
 }
 
 /// [`vpl_core::RayCaster`] on the device: batches go through a
 /// [`GpuRayCaster`] over the shared scene upload, and the hits are completed
-/// on the host ([`vpl_core::Scene::hit_near`]): the triangle the GPU found,
+/// on the host ([`vpl_core::Scene::hit_on`]): the triangle the GPU found,
 /// at the t the CPU's test of that triangle gives, so a ray that finds the
-/// same triangle gives the CPU's hit bit for bit.
+/// same triangle gives the CPU's hit bit for bit (and only the triangle
+/// crosses back).
 pub struct GpuRays {
     gpu: crate::Gpu,
     caster: std::sync::OnceLock<GpuRayCaster>,
@@ -159,8 +233,8 @@ impl vpl_core::RayCaster for GpuRays {
     /// When the device fails.
     fn intersect(&self, scene: &vpl_core::Scene, rays: &[Ray]) -> Vec<Option<vpl_core::Hit>> {
         let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
-        let hits = self.caster().closest(self.gpu.ctx(), &gs, rays).unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
-        rays.iter().zip(hits).map(|(r, h)| h.map(|(tri, t)| scene.hit_near(r, tri, t))).collect()
+        let tris = self.caster().closest_triangles(self.gpu.ctx(), &gs, rays).unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
+        rays.iter().zip(tris).map(|(r, tri)| tri.map(|tri| scene.hit_on(r, tri))).collect()
     }
 
     /// # Panics
@@ -171,17 +245,17 @@ impl vpl_core::RayCaster for GpuRays {
     }
 
     /// The rays made on the device from the camera and the key; each hit
-    /// completed with the host's ray ([`vpl_core::Scene::hit_near`]).
+    /// completed with the host's ray ([`vpl_core::Scene::hit_on`]).
     ///
     /// # Panics
     /// When the device fails.
     fn intersect_camera(&self, scene: &vpl_core::Scene, batch: &vpl_core::CameraRays) -> Vec<Option<vpl_core::Hit>> {
         let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
-        let hits = self
+        let tris = self
             .caster()
-            .closest_camera(self.gpu.ctx(), &gs, batch.camera, batch.key, batch.rays.len())
+            .camera_triangles(self.gpu.ctx(), &gs, batch.camera, batch.key, batch.rays.len())
             .unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
-        batch.rays.iter().zip(hits).map(|(r, h)| h.map(|(tri, t)| scene.hit_near(r, tri, t))).collect()
+        batch.rays.iter().zip(tris).map(|(r, tri)| tri.map(|tri| scene.hit_on(r, tri))).collect()
     }
 
     /// A batch is a submission and a wait: rounds are better cast together.

@@ -776,36 +776,37 @@ impl AreaProbes {
         // 60°) are tried first, nearest first; then those around an edge
         // (within 120°). The first the probe sees owns it.
         let mut owner: Vec<Option<usize>> = vec![None; todo.len()];
-        for (lo, hi) in [(SAME_SURFACE_COS, f32::INFINITY), (SAME_SIDE_COS, SAME_SURFACE_COS)] {
-            let accept = |q: &Probe, i: usize| {
-                let c = sites[i].n.dot(q.n);
-                c > lo && c <= hi
-            };
-            // The nearest accepted site first (one query, usually the owner),
-            // then the next ones for the probes that do not see it: in
-            // rounds, or in one batch when `rays` speculates (only the few
-            // that fail the first try, so that speculating costs few rays).
-            let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
-            let batches = &self.batches;
-            let first: Vec<(usize, Vec<usize>)> = open
-                .par_iter()
-                .filter_map(|&t| {
-                    let q = &batches[todo[t].0][todo[t].1];
-                    tree.nearest_accepted(q.p, None, |i| accept(q, i)).map(|(i, _)| (t, vec![i]))
-                })
-                .collect();
-            cast += self.own_first_seen(scene, rays, sites, todo, &first, &mut owner);
-            let open: Vec<usize> = open.into_iter().filter(|&t| owner[t].is_none()).collect();
-            let batches = &self.batches;
-            let more: Vec<(usize, Vec<usize>)> = open
-                .par_iter()
-                .map(|&t| {
-                    let q = &batches[todo[t].0][todo[t].1];
-                    (t, tree.nearest_accepted_n(q.p, None, |i| accept(q, i), OWNER_TRIES).into_iter().skip(1).map(|(i, _)| i).collect())
-                })
-                .collect();
-            cast += self.own_first_seen(scene, rays, sites, todo, &more, &mut owner);
-        }
+        let same_surface = |q: &Probe, i: usize| sites[i].n.dot(q.n) > SAME_SURFACE_COS;
+        let around_edge = |q: &Probe, i: usize| {
+            let c = sites[i].n.dot(q.n);
+            c > SAME_SIDE_COS && c <= SAME_SURFACE_COS
+        };
+        // The nearest site on the probe's surface first (one query, usually
+        // the owner), then, for the probes that do not see it, the next ones
+        // on its surface and those around an edge, in that order: in rounds,
+        // or in one batch when `rays` speculates (only the few that fail the
+        // first try, so that speculating costs few rays).
+        let batches = &self.batches;
+        let first: Vec<(usize, Vec<usize>)> = (0..todo.len())
+            .into_par_iter()
+            .filter_map(|t| {
+                let q = &batches[todo[t].0][todo[t].1];
+                tree.nearest_accepted(q.p, None, |i| same_surface(q, i)).map(|(i, _)| (t, vec![i]))
+            })
+            .collect();
+        cast += self.own_first_seen(scene, rays, sites, todo, &first, &mut owner);
+        let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
+        let batches = &self.batches;
+        let more: Vec<(usize, Vec<usize>)> = open
+            .par_iter()
+            .map(|&t| {
+                let q = &batches[todo[t].0][todo[t].1];
+                let on_surface = tree.nearest_accepted_n(q.p, None, |i| same_surface(q, i), OWNER_TRIES).into_iter().skip(1);
+                let round_edge = tree.nearest_accepted_n(q.p, None, |i| around_edge(q, i), OWNER_TRIES);
+                (t, on_surface.chain(round_edge).map(|(i, _)| i).collect())
+            })
+            .collect();
+        cast += self.own_first_seen(scene, rays, sites, todo, &more, &mut owner);
         self.write_owners(live, todo, &owner);
         // The probes still without an owner try the VPLs whose cells hold
         // the probes next to them, round by round, so that a cell reaches

@@ -40,9 +40,11 @@ struct ModulateParams {
 /// each waited for on the device.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuShadeTimings {
-    /// Uploading the VPLs (and the subsets or G-buffer when they changed).
+    /// Preparing and queueing the uploads of the VPLs (and the subsets or
+    /// G-buffer when they changed); the transfer itself goes with the
+    /// gather's submission, not in one of its own.
     pub upload_ms: f64,
-    /// The gather kernel.
+    /// The gather kernel, the uploads' transfer included.
     pub gather_ms: f64,
     /// The filter and the albedo kernels.
     pub filter_ms: f64,
@@ -231,7 +233,6 @@ impl GpuInterleavedShader {
         let b_e = storage(ctx, "E", n as u64 * 16)?;
         let group =
             bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
-        finish(ctx, ctx.device.create_command_encoder(&Default::default()))?;
         let t_up = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(

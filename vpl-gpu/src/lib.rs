@@ -6,7 +6,7 @@
 //!
 //! | kernel | twin | behind |
 //! | --- | --- | --- |
-//! | [`GpuRayCaster`]: closest hit and occlusion over [`GpuScene`] (binary BVH in storage buffers) | `Scene::intersect`, `Scene::occluded` | batch calls; [`GpuRays`] is a `RayCaster` (SMC's camera, candidate and visibility rays) |
+//! | [`GpuRayCaster`]: closest hit and occlusion over [`GpuScene`] (binary BVH in storage buffers); camera rays made on the device | `Scene::intersect`, `Scene::occluded`, `CameraRays` | batch calls; [`GpuRays`] is a `RayCaster` (SMC's camera, candidate and visibility rays) |
 //! | [`GpuGBufferRenderer`] / [`Gpu::render_gbuffer`] | `vpl_shading::render_gbuffer` | returns a `GBuffer` |
 //! | [`GpuShadowMaps`]: paraboloid maps of moved slots, one ray per texel | `vpl_visibility::ShadowMaps` | `VplVisibility` |
 //! | [`GpuRayTraced`]: shadow rays in the shading kernel | `vpl_visibility::RayTraced` | `VplVisibility` |
@@ -19,6 +19,29 @@
 //! arithmetic in the same order, so they differ only by rounding (fused
 //! multiply-adds, `exp`, normalisation) and by ties: on lavapipe the
 //! unfiltered shading is bit-equal to the CPU's.
+//!
+//! ## What crosses the bus
+//!
+//! The frame stays on the device: under `vpl_render::ReadBack::Nothing`
+//! the G-buffer, the shadow maps, the gathered and filtered image stay
+//! there, and only what the host asks for comes back. Every upload, read
+//! and submission is counted ([`Gpu::traffic`], [`Traffic`]; `vpl
+//! bench-gpu` prints them per frame). Sampling talks to the device in
+//! batches, each one submission and one wait, and moves little in each:
+//!
+//! - camera rays are made on the device from the camera and one stream key
+//!   ([`vpl_core::CameraRays`]); other rays go up as 24 B (unbounded) or
+//!   28 B, and come back as the triangle hit (4 B, the host completes the
+//!   hit with its own triangle test) or one bit of occlusion;
+//! - radiosity paths draw the CPU's streams from one key a point and are
+//!   summed on the device (56 B up and 16 B back a point); the lights stay
+//!   on the device until they change;
+//! - rounds of visibility tests where the first pass wins are cast in one
+//!   batch ([`vpl_core::RayCaster::speculates`]), with the same answers.
+//!
+//! A steady SMC frame at 1920×1080 with 2048 VPLs on office moves 1.8 MB in
+//! 12 submissions (lavapipe; the counts do not depend on the device), where
+//! reading the G-buffer and image back moved 199 MB.
 //!
 //! ```no_run
 //! use vpl_core::{GeometryClamp, IndirectShader, SceneSetup, Vpl, VplSet, VplVisibility};

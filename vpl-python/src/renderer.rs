@@ -1,6 +1,6 @@
 //! `vpl.Renderer`: the VPL renderer of `vpl-render`, frame after frame.
 
-use crate::arrays::{image, vectors};
+use crate::arrays::{image as to_array, vectors};
 use crate::error::vpl_err;
 use crate::interrupt::interruptible;
 use crate::sampler::{Hooks, PythonSampler, Recorded, lock};
@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use std::sync::{Arc, Mutex};
 use vpl_render::vpl_core::{Budget, GeometryClamp, Params, Stat, VplSampler};
-use vpl_render::{Backend, Clamp, CpuBackend, FrameOutput, Registry, Renderer, ShadingSpec, VisibilitySpec};
+use vpl_render::{Backend, Clamp, CpuBackend, FrameOutput, ReadBack, Registry, Renderer, ShadingSpec, VisibilitySpec};
 
 /// What the last frame left besides its image.
 struct Last {
@@ -173,12 +173,16 @@ impl PyRenderer {
 
     /// Renders frame `index` (the scene's animation at that frame; a scene
     /// without one stays as it is, frames 1/30 s apart) and returns its
-    /// image, float32 (height, width, 3). Releases the GIL; Ctrl-C stops
+    /// image, float32 (height, width, 3). With `image=False` it returns
+    /// None, and on the GPU backend an indirect frame stays on the device
+    /// (neither its G-buffer nor its image is read back) until `image()` or
+    /// `indirect()` asks for it. Releases the GIL; Ctrl-C stops
     /// the frame at its next stage boundary (before the sampler, after the
     /// visibility update, after shading) and raises KeyboardInterrupt. An
     /// interrupted frame may have advanced the sampler (and the visibility
     /// with it); the next frame renders on from there.
-    fn frame<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    #[pyo3(signature = (index, image = true))]
+    fn frame<'py>(&self, py: Python<'py>, index: u32, image: bool) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
         let base = self.scene.get();
         let count = base.setup.sequence.as_ref().map_or(1, |s| s.frame_count());
         let at = if base.setup.sequence.is_some() {
@@ -199,15 +203,30 @@ impl PyRenderer {
         let mut state =
             self.state.try_lock().map_err(|_| vpl_err("the renderer is busy (next_frame may not render with its own renderer)"))?;
         let renderer = &mut state.renderer;
+        // On the GPU the G-buffer stays on the device either way; the image
+        // comes back only when asked for.
+        renderer.set_read_back(if image { ReadBack::Image } else { ReadBack::Nothing });
         let result = interruptible(py, |cancel| renderer.render_cancellable(&scene, &camera, index as u64, time, cancel), |_| {})?;
         let raised = lock(&self.hooks).error.take();
         if let Some(e) = raised {
             return Err(e);
         }
         let out = result.map_err(vpl_err)?;
-        let img = image(py, &out.image);
+        let img = image.then(|| to_array(py, &out.image));
         state.last = Some(Last { out, frame: index as u64 });
         Ok(img)
+    }
+
+    /// The last frame's image, float32 (height, width, 3), read back from
+    /// the device when the frame left it there (`frame(i, image=False)`);
+    /// None before the first frame.
+    fn image<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
+        let state = self.state.try_lock().map_err(|_| vpl_err("the renderer is busy"))?;
+        let Some(last) = &state.last else { return Ok(None) };
+        if last.out.image.on_host() {
+            return Ok(Some(to_array(py, &last.out.image)));
+        }
+        Ok(state.renderer.read_image().map(|i| to_array(py, &i)))
     }
 
     /// The VPLs of the last frame as a NumPy structured array, one row per
@@ -294,7 +313,12 @@ impl PyRenderer {
     /// (height, width, 3), or None before a frame or in `direct` mode.
     fn indirect<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
         let state = self.state.try_lock().map_err(|_| vpl_err("the renderer is busy"))?;
-        Ok(state.last.as_ref().and_then(|l| l.out.indirect.as_ref()).map(|i| image(py, i)))
+        let Some(indirect) = state.last.as_ref().and_then(|l| l.out.indirect.as_ref()) else { return Ok(None) };
+        if indirect.on_host() {
+            return Ok(Some(to_array(py, indirect)));
+        }
+        // Left on the device: an indirect frame, whose image is its indirect light.
+        Ok(state.renderer.read_image().map(|i| to_array(py, &i)))
     }
 
     /// The sampler's name (a registry name, or the Python sampler's class).

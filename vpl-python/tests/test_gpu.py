@@ -31,3 +31,26 @@ def test_gpu_frames_match_the_cpu_frames():
         assert np.array_equal(g.vpls(), c.vpls())
         err = ((gi - ci) ** 2).sum() / (ci**2).sum()
         assert err <= 1e-6, (f, err)
+
+
+def test_gpu_frames_stay_on_the_device_until_asked():
+    """`frame(i, image=False)` leaves an indirect frame on the device and
+    returns None; `image()` and `indirect()` read it back on request, and it
+    is the image the same renderer returns when asked each frame, bit for
+    bit (the same kernels on the same inputs)."""
+    office = vpl.Scene.load("office")
+    kw = dict(sampler="smc", vpls=256, size=(48, 27), mode="indirect", seed=5)
+    try:
+        lazy = vpl.Renderer(office, backend="gpu", **kw)
+    except vpl.VplError as e:
+        if os.environ.get("VPL_REQUIRE_GPU") == "1":
+            raise
+        pytest.skip(f"no GPU adapter: {e}")
+    eager = vpl.Renderer(office, backend="gpu", **kw)
+    for f in (0, 1):
+        assert lazy.frame(f, image=False) is None
+        want = eager.frame(f)
+        got = lazy.image()
+        assert got is not None and got.shape == (27, 48, 3)
+        assert np.array_equal(got, want), f
+        assert np.array_equal(lazy.indirect(), want), f

@@ -42,6 +42,14 @@ def test_the_same_settings_give_the_same_bits(cornell):
     assert np.array_equal(a.vpls(), b.vpls())
 
 
+def test_frames_return_images_only_when_asked(cornell):
+    a = vpl.Renderer(cornell, sampler="ir", vpls=64, size=(16, 16), seed=3)
+    b = vpl.Renderer(cornell, sampler="ir", vpls=64, size=(16, 16), seed=3)
+    assert a.image() is None
+    assert a.frame(0, image=False) is None
+    assert np.array_equal(a.image(), b.frame(0))
+
+
 def test_every_builtin_sampler_renders(cornell):
     for name in ["ir", "rr", "mir", "tcas", "smc", "smc-knn"]:
         r = vpl.Renderer(cornell, sampler=name, vpls=32, size=(8, 8), mode="indirect", visibility="raytraced")

@@ -367,6 +367,17 @@ impl Renderer {
         if self.last_on_device { self.shader.as_ref()?.read_image() } else { self.previous.clone() }
     }
 
+    /// What the next frames on a device bring to the host (see
+    /// [`RendererBuilder::read_back`]); frames on the host are unchanged.
+    pub fn set_read_back(&mut self, read_back: ReadBack) {
+        self.read_back = read_back;
+    }
+
+    /// What frames on a device bring to the host.
+    pub fn read_back(&self) -> ReadBack {
+        self.read_back
+    }
+
     /// The budget and depth every stage reads.
     pub fn budget(&self) -> Budget {
         self.budget

@@ -231,6 +231,27 @@ impl<'a> CameraRays<'a> {
     }
 }
 
+/// Rays cosine-distributed about the shading normals of points a
+/// [`CameraRays`] batch found: ray k leaves the hit of camera ray
+/// `origins[k].0` (normals turned toward the camera, offset along the
+/// geometric normal by the scene's epsilon) in direction
+/// `LocalFrame::from_normal(n).to_world(cosine_hemisphere(u, v))`, (u, v) the
+/// first two draws of stream `origins[k].1` under `key`. The rays are made
+/// on the host; a [`RayCaster`](crate::RayCaster) on a device that still
+/// holds the camera batch's hits may make them there
+/// ([`RayCaster::intersect_bounce`](crate::RayCaster::intersect_bounce)).
+#[derive(Clone, Debug)]
+pub struct BounceRays<'a> {
+    /// The camera batch whose hits the rays leave.
+    pub camera: &'a CameraRays<'a>,
+    /// The key of the rays' streams.
+    pub key: u64,
+    /// Per ray: the camera ray whose hit it leaves, and its stream's index.
+    pub origins: Vec<(u32, u32)>,
+    /// The rays, in order.
+    pub rays: Vec<Ray>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -96,7 +96,7 @@ pub mod view;
 pub mod vpl;
 
 pub use budget::Budget;
-pub use camera::{Camera, CameraRays, FovAxis};
+pub use camera::{BounceRays, Camera, CameraRays, FovAxis};
 pub use clamp::GeometryClamp;
 pub use emission::EmittedRay;
 pub use error::{CoreError, Result};

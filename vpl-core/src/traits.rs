@@ -3,7 +3,7 @@
 //! into indirect light, and radiosity estimators give L(y) to the samplers
 //! that need it.
 
-use crate::camera::CameraRays;
+use crate::camera::{BounceRays, CameraRays};
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, Receivers};
 use crate::image::Image;
@@ -91,6 +91,15 @@ pub trait RayCaster: Send + Sync {
     /// with the host's rays, so they differ from the default's only where a
     /// ray grazes an edge.
     fn intersect_camera(&self, scene: &Scene, batch: &CameraRays) -> Vec<Option<Hit>> {
+        self.intersect(scene, &batch.rays)
+    }
+    /// The closest hits of `batch`'s rays from the hits of a camera batch,
+    /// as [`intersect`](RayCaster::intersect)`(scene, &batch.rays)`. A
+    /// caster on a device that still holds the camera batch's hits may make
+    /// the rays there (8 B a ray up instead of 24); the hits are then
+    /// completed with the host's rays, as in
+    /// [`intersect_camera`](RayCaster::intersect_camera).
+    fn intersect_bounce(&self, scene: &Scene, batch: &BounceRays) -> Vec<Option<Hit>> {
         self.intersect(scene, &batch.rays)
     }
     /// Whether a batch costs far more than its rays, so that a caller

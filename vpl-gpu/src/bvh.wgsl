@@ -178,7 +178,11 @@ struct Surface {
 }
 
 fn surface_at(prim: u32, p: vec3<f32>) -> Surface {
-    let tri = bvh_order[prim];
+    return surface_of(bvh_order[prim], p);
+}
+
+// The surface of scene triangle `tri` at `p`, as surface_at.
+fn surface_of(tri: u32, p: vec3<f32>) -> Surface {
     let a = tri_info[4u * tri];
     let b = tri_info[4u * tri + 1u];
     let ng = tri_info[4u * tri + 3u].xyz;

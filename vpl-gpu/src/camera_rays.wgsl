@@ -2,7 +2,14 @@
 // Ray j draws (u, v) and then the lens sample from stream j under the key,
 // and is the camera's ray through raster (u·w, v·h) (vpl_core::Camera::ray).
 // Closest hits come back as (t, scene triangle) pairs, or (`tri_only`) as
-// the triangle alone, as raycast.wgsl's.
+// the triangles in words [0, count) and their t in [count, 2·count), so
+// that the triangles read back alone and the hits stay for `bounce`.
+//
+// `bounce`: twin of vpl_core::BounceRays. Ray k leaves the hit of camera
+// ray origins[k].x (normals turned toward the camera, offset by eps along
+// the geometric normal), cosine-distributed about its shading normal with
+// the first two draws of stream origins[k].y under the bounce key; its
+// closest hit comes back as the triangle.
 
 struct Params {
     count: u32,
@@ -22,13 +29,30 @@ struct Params {
     raster: vec4<f32>,
 }
 
+struct BounceParams {
+    count: u32,
+    row: u32,
+    key_lo: u32,
+    key_hi: u32,
+    eps: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read_write> hits: array<u32>;
+@group(1) @binding(2) var<uniform> bp: BounceParams;
+@group(1) @binding(3) var<storage, read> origins: array<vec2<u32>>;
+@group(1) @binding(4) var<storage, read_write> bounce_hits: array<u32>;
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let j = id.x + id.y * params.row;
-    if (j >= params.count) { return; }
+struct CameraRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+}
+
+// Camera ray j, as vpl_core::CameraRays::ray.
+fn camera_ray(j: u32) -> CameraRay {
     let r = keyed_state(vec2<u32>(params.key_lo, params.key_hi), j);
     rng_state = r.xy;
     rng_inc = r.zw;
@@ -50,7 +74,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         o = o + params.right.xyz * l.x + params.up.xyz * l.y;
         dir = normalize(focus - o);
     }
-    let hit = closest_hit(o, dir, NO_HIT);
+    return CameraRay(o, dir);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let j = id.x + id.y * params.row;
+    if (j >= params.count) { return; }
+    let ray = camera_ray(j);
+    let hit = closest_hit(ray.o, ray.d, NO_HIT);
     var t = NO_HIT;
     var tri = NONE;
     if (hit.prim != NONE) {
@@ -59,8 +91,43 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if (params.tri_only != 0u) {
         hits[j] = tri;
+        hits[params.count + j] = bitcast<u32>(t);
     } else {
         hits[2u * j] = bitcast<u32>(t);
         hits[2u * j + 1u] = tri;
+    }
+}
+
+@compute @workgroup_size(64)
+fn bounce(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.x + id.y * bp.row;
+    if (k >= bp.count) { return; }
+    let org = origins[k];
+    let tri = hits[org.x];
+    if (tri == NONE) {
+        bounce_hits[k] = NONE;
+        return;
+    }
+    let ray = camera_ray(org.x);
+    let p = ray.o + ray.d * bitcast<f32>(hits[params.count + org.x]);
+    let sf = surface_of(tri, p);
+    var n = sf.n;
+    var ng = sf.ng;
+    // SurfacePoint::facing(-d).
+    if (dot(-ray.d, ng) < 0.0) {
+        n = -n;
+        ng = -ng;
+    }
+    let r = keyed_state(vec2<u32>(bp.key_lo, bp.key_hi), org.y);
+    rng_state = r.xy;
+    rng_inc = r.zw;
+    let u = next_f32();
+    let v = next_f32();
+    let d = to_world(n, cosine_hemisphere(u, v));
+    let h = closest_hit(p + ng * bp.eps, d, NO_HIT);
+    if (h.prim == NONE) {
+        bounce_hits[k] = NONE;
+    } else {
+        bounce_hits[k] = bvh_order[h.prim];
     }
 }

@@ -37,7 +37,8 @@ struct ModulateParams {
 }
 
 /// Milliseconds of the steps of the last [`GpuInterleavedShader`] shade,
-/// each waited for on the device.
+/// each waited for on the device. The gather and the filter are apart only
+/// under [`GpuInterleavedShader::profile`]; else `gather_ms` holds both.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuShadeTimings {
     /// Preparing and queueing the uploads of the VPLs (and the subsets or
@@ -83,6 +84,9 @@ pub struct GpuInterleavedShader {
     exhaustive: bool,
     /// Leave images on the device ([`IndirectShader::keep_on_device`]).
     keep: bool,
+    /// Whether the gather and the filter are submitted and waited for
+    /// apart, so that [`GpuShadeTimings`] times each.
+    profile: bool,
     /// The last image left on the device: its size and buffer.
     kept: Option<(u32, u32, wgpu::Buffer)>,
 }
@@ -100,8 +104,16 @@ impl GpuInterleavedShader {
             device_timings: GpuShadeTimings::default(),
             exhaustive: false,
             keep: false,
+            profile: false,
             kept: None,
         }
+    }
+
+    /// Submits and waits for the gather and the filter apart, so that
+    /// [`GpuInterleavedShader::device_timings`] times each (one more
+    /// submission a frame); by default they go in one.
+    pub fn profile(&mut self, profile: bool) {
+        self.profile = profile;
     }
 
     /// Every VPL at every pixel, unfiltered: twin of
@@ -241,9 +253,10 @@ impl GpuInterleavedShader {
             &[&scene.group, &group],
             (gbuf.width.div_ceil(4).div_ceil(8), gbuf.height.div_ceil(4).div_ceil(8), CLASSES as u32),
         );
-        finish(ctx, enc)?;
+        if self.profile {
+            finish(ctx, std::mem::replace(&mut enc, ctx.device.create_command_encoder(&Default::default())))?;
+        }
         let t1 = Instant::now();
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
         let filtered;
         let e = match &self.cpu.filter {
             Some(f) => {

@@ -4,7 +4,7 @@
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
-use vpl_core::{Camera, Ray};
+use vpl_core::{Camera, CameraRays, Ray};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -28,6 +28,32 @@ struct CameraParams {
     right: [f32; 4],
     up: [f32; 4],
     raster: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BounceParams {
+    count: u32,
+    row: u32,
+    key: [u32; 2],
+    eps: f32,
+    pad: [u32; 3],
+}
+
+/// The hits of a camera batch left on the device, for rays that leave them.
+pub(crate) struct KeptCamera {
+    key: u64,
+    count: usize,
+    camera: Camera,
+    params: wgpu::Buffer,
+    hits: wgpu::Buffer,
+}
+
+impl KeptCamera {
+    /// Whether these are the hits of `batch`.
+    fn holds(&self, batch: &CameraRays) -> bool {
+        self.key == batch.key && self.count == batch.rays.len() && self.camera == *batch.camera
+    }
 }
 
 const WORKGROUP: u32 = 64;
@@ -66,6 +92,8 @@ pub struct GpuRayCaster {
     any_hit: wgpu::ComputePipeline,
     camera_layout: wgpu::BindGroupLayout,
     camera: wgpu::ComputePipeline,
+    bounce_layout: wgpu::BindGroupLayout,
+    bounce: wgpu::ComputePipeline,
 }
 
 impl GpuRayCaster {
@@ -79,7 +107,10 @@ impl GpuRayCaster {
         let camera_layout = crate::kernel::layout(ctx, "camera rays", &[Binding::Uniform, Binding::ReadWrite]);
         let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}", include_str!("camera_rays.wgsl"));
         let camera = pipeline(ctx, "camera rays", &source, "main", &[&scene, &camera_layout]);
-        GpuRayCaster { layout, closest, any_hit, camera_layout, camera }
+        let (u, r, w) = (Binding::Uniform, Binding::Read, Binding::ReadWrite);
+        let bounce_layout = crate::kernel::layout(ctx, "bounce rays", &[u, w, u, r, w]);
+        let bounce = pipeline(ctx, "bounce rays", &source, "bounce", &[&scene, &bounce_layout]);
+        GpuRayCaster { layout, closest, any_hit, camera_layout, camera, bounce_layout, bounce }
     }
 
     /// Casts `rays` and reads back the words of `answer`.
@@ -120,7 +151,9 @@ impl GpuRayCaster {
     }
 
     /// Makes the `count` camera rays of `camera` under `key` on the device,
-    /// casts them and reads back the words of `answer`.
+    /// casts them and reads back the words of `answer`; with
+    /// [`Answer::Triangles`] the hits stay on the device for
+    /// [`GpuRayCaster::bounce_triangles`].
     fn run_camera(
         &self,
         ctx: &GpuContext,
@@ -129,9 +162,9 @@ impl GpuRayCaster {
         key: u64,
         count: usize,
         answer: Answer,
-    ) -> Result<Vec<u32>, GpuError> {
+    ) -> Result<(Vec<u32>, Option<KeptCamera>), GpuError> {
         if count == 0 {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), None));
         }
         let groups = groups_1d(ctx, count as u64, WORKGROUP);
         let (f, right, up, sx, sy) = camera.raster_basis();
@@ -149,13 +182,49 @@ impl GpuRayCaster {
             up: up.extend(camera.focus_distance).into(),
             raster: [w as f32, h as f32, camera.lens_radius.max(0.0), 0.0],
         };
+        // Triangles, then their t (kept on the device); or (t, triangle) pairs.
         let words = if tri_only { count } else { 2 * count };
         let b_params = uniform(ctx, "camera rays params", &params);
-        let b_hits = storage(ctx, "camera hits", words as u64 * 4)?;
+        let b_hits = storage(ctx, "camera hits", 2 * count as u64 * 4)?;
         let group = bind(ctx, "camera rays", &self.camera_layout, &[&b_params, &b_hits]);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, &self.camera, &[&scene.group, &group], groups);
-        finish_read(ctx, enc, &b_hits, words)
+        let out = finish_read(ctx, enc, &b_hits, words)?;
+        let kept = tri_only.then(|| KeptCamera { key, count, camera: camera.clone(), params: b_params, hits: b_hits });
+        Ok((out, kept))
+    }
+
+    /// The triangles the rays of `bounce` hit, made on the device from the
+    /// hits of the camera batch `kept` holds ([`vpl_core::BounceRays`]):
+    /// 8 B a ray up, 4 B back.
+    pub(crate) fn bounce_triangles(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        kept: &KeptCamera,
+        key: u64,
+        eps: f32,
+        origins: &[(u32, u32)],
+    ) -> Result<Vec<Option<u32>>, GpuError> {
+        if origins.is_empty() {
+            return Ok(Vec::new());
+        }
+        let groups = groups_1d(ctx, origins.len() as u64, WORKGROUP);
+        let params = BounceParams {
+            count: origins.len() as u32,
+            row: groups.0 * WORKGROUP,
+            key: [key as u32, (key >> 32) as u32],
+            eps,
+            pad: [0; 3],
+        };
+        let b_params = uniform(ctx, "bounce params", &params);
+        let flat: Vec<[u32; 2]> = origins.iter().map(|&(i, j)| [i, j]).collect();
+        let b_origins = storage_init(ctx, "bounce origins", &flat);
+        let b_out = storage(ctx, "bounce hits", origins.len() as u64 * 4)?;
+        let group = bind(ctx, "bounce", &self.bounce_layout, &[&kept.params, &kept.hits, &b_params, &b_origins, &b_out]);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        dispatch(&mut enc, &self.bounce, &[&scene.group, &group], groups);
+        Ok(triangles_of(finish_read(ctx, enc, &b_out, origins.len())?))
     }
 
     /// Closest hits of the `count` camera rays of `camera` under `key`
@@ -169,7 +238,7 @@ impl GpuRayCaster {
         key: u64,
         count: usize,
     ) -> Result<Vec<Option<(u32, f32)>>, GpuError> {
-        Ok(hits_of(self.run_camera(ctx, scene, camera, key, count, Answer::Hits)?))
+        Ok(hits_of(self.run_camera(ctx, scene, camera, key, count, Answer::Hits)?.0))
     }
 
     /// The triangles [`GpuRayCaster::closest_camera`] finds, alone (4 B a ray).
@@ -181,7 +250,7 @@ impl GpuRayCaster {
         key: u64,
         count: usize,
     ) -> Result<Vec<Option<u32>>, GpuError> {
-        Ok(triangles_of(self.run_camera(ctx, scene, camera, key, count, Answer::Triangles)?))
+        Ok(triangles_of(self.run_camera(ctx, scene, camera, key, count, Answer::Triangles)?.0))
     }
 
     /// Closest hit of each ray: (scene triangle, t), as `Scene::intersect`'s
@@ -211,12 +280,15 @@ impl GpuRayCaster {
 pub struct GpuRays {
     gpu: crate::Gpu,
     caster: std::sync::OnceLock<GpuRayCaster>,
+    /// The hits of the last camera batch and the scene upload they are
+    /// of, for rays that leave them.
+    kept: std::sync::Mutex<Option<(KeptCamera, std::sync::Arc<GpuScene>)>>,
 }
 
 impl GpuRays {
     /// Ray casting on `gpu`.
     pub fn new(gpu: crate::Gpu) -> GpuRays {
-        GpuRays { gpu, caster: std::sync::OnceLock::new() }
+        GpuRays { gpu, caster: std::sync::OnceLock::new(), kept: std::sync::Mutex::new(None) }
     }
 
     fn caster(&self) -> &GpuRayCaster {
@@ -251,9 +323,30 @@ impl vpl_core::RayCaster for GpuRays {
     /// When the device fails.
     fn intersect_camera(&self, scene: &vpl_core::Scene, batch: &vpl_core::CameraRays) -> Vec<Option<vpl_core::Hit>> {
         let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
+        let (words, kept) = self
+            .caster()
+            .run_camera(self.gpu.ctx(), &gs, batch.camera, batch.key, batch.rays.len(), Answer::Triangles)
+            .unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
+        *self.kept.lock().expect("kept camera hits lock") = kept.map(|k| (k, gs));
+        batch.rays.iter().zip(triangles_of(words)).map(|(r, tri)| tri.map(|tri| scene.hit_on(r, tri))).collect()
+    }
+
+    /// Made on the device from the camera batch's hits when they are the
+    /// last batch's (else cast as given); each hit completed with the
+    /// host's ray ([`vpl_core::Scene::hit_on`]).
+    ///
+    /// # Panics
+    /// When the device fails.
+    fn intersect_bounce(&self, scene: &vpl_core::Scene, batch: &vpl_core::BounceRays) -> Vec<Option<vpl_core::Hit>> {
+        let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
+        let kept = self.kept.lock().expect("kept camera hits lock");
+        let Some((k, _)) = kept.as_ref().filter(|(k, s)| k.holds(batch.camera) && std::sync::Arc::ptr_eq(s, &gs)) else {
+            drop(kept);
+            return self.intersect(scene, &batch.rays);
+        };
         let tris = self
             .caster()
-            .camera_triangles(self.gpu.ctx(), &gs, batch.camera, batch.key, batch.rays.len())
+            .bounce_triangles(self.gpu.ctx(), &gs, k, batch.key, scene.epsilon(), &batch.origins)
             .unwrap_or_else(|e| panic!("GPU ray casting: {e}"));
         batch.rays.iter().zip(tris).map(|(r, tri)| tri.map(|tri| scene.hit_on(r, tri))).collect()
     }

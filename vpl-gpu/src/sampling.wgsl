@@ -106,3 +106,18 @@ fn concentric_disk(u: f32, v: f32) -> vec2<f32> {
     return vec2<f32>(b * cs.y, b * cs.x);
 }
 
+fn cosine_hemisphere(u: f32, v: f32) -> vec3<f32> {
+    let d = concentric_disk(u, v);
+    return vec3<f32>(d.x, d.y, sqrt(max(1.0 - d.x * d.x - d.y * d.y, 0.0)));
+}
+
+// vpl_core::LocalFrame::from_normal(n).to_world(v)
+fn to_world(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    // copysign(1, n.z): -0.0 counts as negative, as on the CPU.
+    let sgn = select(1.0, -1.0, (bitcast<u32>(n.z) & 0x80000000u) != 0u);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    let s = vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    let t = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    return s * v.x + t * v.y + n * v.z;
+}

@@ -147,3 +147,48 @@ fn camera_rays_made_on_the_device_hit_what_the_host_rays_hit() {
         assert!(same as f64 >= 0.99 * hits as f64, "{name}: the same triangle on {same} of {hits} hits");
     }
 }
+
+/// Candidate rays made on the device from the hits of a camera batch it
+/// still holds ([`vpl_core::BounceRays`] through [`GpuRays`]) against the
+/// host's rays cast on the CPU BVH: the device's rays differ from the
+/// host's by rounding (its camera points come from its own camera rays), so
+/// the tolerance is the one above: the same hit on at least 99.9 % of rays.
+#[test]
+fn bounce_rays_made_on_the_device_hit_what_the_host_rays_hit() {
+    use vpl_core::sampling::cosine_hemisphere;
+    use vpl_core::{BounceRays, CpuRays, LocalFrame, RayCaster};
+    let Some(ctx) = context() else { return };
+    let setup = SceneSetup::load("office").unwrap();
+    let scene = &setup.scene;
+    let gpu = vpl_gpu::Gpu::from_context(ctx);
+    let rays = vpl_gpu::GpuRays::new(gpu.clone());
+    let camera = setup.camera.with_resolution((320, 180)).unwrap();
+    let batch = CameraRays::new(&camera, 0x5EED_0002, 20_000);
+    let hits = rays.intersect_camera(scene, &batch);
+    let key = 0x5EED_0003;
+    let eps = scene.epsilon();
+    let (mut origins, mut cast) = (Vec::new(), Vec::new());
+    for (i, (r, h)) in batch.rays.iter().zip(&hits).enumerate() {
+        let Some((x, _)) = h.and_then(|h| scene.reflecting(r, h)) else { continue };
+        let j = origins.len() as u32;
+        let (u, v) = vpl_core::rng::keyed_stream(key, j as u64).next_2d();
+        let d = LocalFrame::from_normal(x.n).to_world(cosine_hemisphere(u, v));
+        if d.dot(x.ng) > 0.0 {
+            origins.push((i as u32, j));
+            cast.push(Ray::new(x.p + x.ng * eps, d));
+        }
+    }
+    let bounce = BounceRays { camera: &batch, key, origins, rays: cast };
+    let before = gpu.traffic();
+    let gpu_hits = rays.intersect_bounce(scene, &bounce);
+    let moved = gpu.traffic() - before;
+    let cpu = CpuRays.intersect(scene, &bounce.rays);
+    let n = bounce.rays.len();
+    // Made on the device: 8 B a ray up (not the 24 B of the rays), 4 B back.
+    assert!(moved.bytes_up <= 8 * n as u64 + 256 && moved.bytes_down == 4 * n as u64, "{moved}");
+    let same = cpu.iter().zip(&gpu_hits).filter(|(a, b)| a == b).count();
+    let hit = cpu.iter().filter(|h| h.is_some()).count();
+    eprintln!("{same} of {n} bounce rays hit as on the CPU ({hit} hit)");
+    assert!(n > 10_000 && hit > n / 2);
+    assert!(same as f64 >= 0.999 * n as f64, "{same} of {n}");
+}

@@ -1,6 +1,7 @@
 //! SMC with its rays (camera points, candidate rays, mailbox and
 //! indirect-visibility rays) cast on the GPU ([`GpuRays`]) against SMC on
-//! the CPU BVH. The camera points' rays are made on the device.
+//! the CPU BVH. The camera points' rays, and the candidate rays that leave
+//! their hits, are made on the device.
 //!
 //! [`GpuRays`] completes each GPU hit with the CPU's test of the triangle the
 //! GPU found, so a ray that finds the same triangle gives the CPU's hit bit
@@ -15,7 +16,7 @@ mod common;
 
 use common::context;
 use std::sync::{Arc, Mutex};
-use vpl_core::{CameraRays, CpuRays, Frame, Hit, Ray, RayCaster, Scene, SceneSetup, Services, VplSampler};
+use vpl_core::{BounceRays, CameraRays, CpuRays, Frame, Hit, Ray, RayCaster, Scene, SceneSetup, Services, VplSampler};
 use vpl_gpu::{Gpu, GpuRays};
 use vpl_smc::{SmcConfig, SmcSampler};
 
@@ -35,6 +36,13 @@ impl RayCaster for Both {
     }
     fn intersect_camera(&self, scene: &Scene, batch: &CameraRays) -> Vec<Option<Hit>> {
         let (g, c) = (self.0.intersect_camera(scene, batch), CpuRays.intersect(scene, &batch.rays));
+        let mut n = self.1.lock().unwrap();
+        n[0] += batch.rays.len();
+        n[1] += c.iter().zip(&g).filter(|(a, b)| a != b).count();
+        g
+    }
+    fn intersect_bounce(&self, scene: &Scene, batch: &BounceRays) -> Vec<Option<Hit>> {
+        let (g, c) = (self.0.intersect_bounce(scene, batch), CpuRays.intersect(scene, &batch.rays));
         let mut n = self.1.lock().unwrap();
         n[0] += batch.rays.len();
         n[1] += c.iter().zip(&g).filter(|(a, b)| a != b).count();

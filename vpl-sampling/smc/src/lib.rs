@@ -96,7 +96,8 @@ pub use config::{SmcConfig, SmcError};
 pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, surface_neighbour_sq};
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};
 pub use points::{
-    CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, first_passing, mutual_ray, mutually_visible, resolve,
+    CameraPoint, CandidateHit, camera_points, camera_points_of, camera_sees, candidate_hits, candidate_hits_from, first_passing,
+    mutual_ray, mutually_visible, resolve,
 };
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};
 pub use vpl_core::resample::{Resampled, resample, resample_counted};

@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use vpl_core::glam::Vec3;
 use vpl_core::rng::stream_key;
 use vpl_core::sampling::cosine_hemisphere;
-use vpl_core::{Camera, CameraRays, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint, stream};
+use vpl_core::{BounceRays, Camera, CameraRays, LocalFrame, Purpose, Ray, RayCaster, Scene, SurfacePoint, stream};
 
 /// A camera-visible point that can reflect VPL light toward the camera,
 /// normals turned toward the camera.
@@ -34,25 +34,62 @@ pub struct CandidateHit {
 /// stream (seed, iteration, CAMERA_POINTS, j); `rays` casts them.
 pub fn camera_points(scene: &Scene, camera: &Camera, rays: &dyn RayCaster, n: usize, seed: u64, iteration: u64) -> Vec<CameraPoint> {
     let batch = CameraRays::new(camera, stream_key(seed, iteration, Purpose::CAMERA_POINTS), n);
-    let hits = rays.intersect_camera(scene, &batch);
+    camera_points_of(scene, rays, &batch).0
+}
+
+/// The camera points of a batch of camera rays ([`camera_points`]), and the
+/// index of the ray each came from.
+pub fn camera_points_of(scene: &Scene, rays: &dyn RayCaster, batch: &CameraRays) -> (Vec<CameraPoint>, Vec<u32>) {
+    let hits = rays.intersect_camera(scene, batch);
     batch
         .rays
         .iter()
         .zip(hits)
-        .filter_map(|(ray, hit)| {
+        .enumerate()
+        .filter_map(|(i, (ray, hit))| {
             let (sp, _) = scene.reflecting(ray, hit?)?;
-            Some(CameraPoint { p: sp.p, n: sp.n, ng: sp.ng })
+            Some((CameraPoint { p: sp.p, n: sp.n, ng: sp.ng }, i as u32))
         })
-        .collect()
+        .unzip()
 }
 
 /// One cosine-distributed ray from every camera point; keeps the hits on
 /// surfaces that reflect back toward the ray's origin, in ray order. Ray j
 /// draws from stream (seed, iteration, CANDIDATE, j); `rays` casts them.
 pub fn candidate_hits(scene: &Scene, rays: &dyn RayCaster, xs: &[CameraPoint], seed: u64, iteration: u64) -> Vec<CandidateHit> {
+    let cast = candidate_rays(scene, xs, seed, iteration);
+    let batch: Vec<Ray> = cast.iter().map(|(_, r)| *r).collect();
+    keep_candidates(scene, &cast, rays.intersect(scene, &batch))
+}
+
+/// [`candidate_hits`] of camera points that came from `batch` (camera
+/// point j from its ray `from[j]`, as [`camera_points_of`] gives them), so
+/// that a caster on a device makes the rays where it holds the camera
+/// batch's hits ([`RayCaster::intersect_bounce`]). The same hits.
+pub fn candidate_hits_from(
+    scene: &Scene,
+    rays: &dyn RayCaster,
+    xs: &[CameraPoint],
+    batch: &CameraRays,
+    from: &[u32],
+    seed: u64,
+    iteration: u64,
+) -> Vec<CandidateHit> {
+    let cast = candidate_rays(scene, xs, seed, iteration);
+    let bounce = BounceRays {
+        camera: batch,
+        key: stream_key(seed, iteration, Purpose::CANDIDATE),
+        origins: cast.iter().map(|&(j, _)| (from[j as usize], j)).collect(),
+        rays: cast.iter().map(|(_, r)| *r).collect(),
+    };
+    keep_candidates(scene, &cast, rays.intersect_bounce(scene, &bounce))
+}
+
+/// The candidate ray of each camera point that has one (its direction above
+/// the geometric normal), with the point's index.
+fn candidate_rays(scene: &Scene, xs: &[CameraPoint], seed: u64, iteration: u64) -> Vec<(u32, Ray)> {
     let eps = scene.epsilon();
-    let cast: Vec<(u32, Ray)> = xs
-        .par_iter()
+    xs.par_iter()
         .enumerate()
         .filter_map(|(j, x)| {
             let mut rng = stream(seed, iteration, Purpose::CANDIDATE, j as u64);
@@ -60,9 +97,11 @@ pub fn candidate_hits(scene: &Scene, rays: &dyn RayCaster, xs: &[CameraPoint], s
             let d = LocalFrame::from_normal(x.n).to_world(cosine_hemisphere(u, v));
             (d.dot(x.ng) > 0.0).then(|| (j as u32, Ray::new(x.p + x.ng * eps, d)))
         })
-        .collect();
-    let batch: Vec<Ray> = cast.iter().map(|(_, r)| *r).collect();
-    let hits = rays.intersect(scene, &batch);
+        .collect()
+}
+
+/// The hits of the candidate rays that reflect back toward their origin.
+fn keep_candidates(scene: &Scene, cast: &[(u32, Ray)], hits: Vec<Option<vpl_core::Hit>>) -> Vec<CandidateHit> {
     cast.iter()
         .zip(hits)
         .filter_map(|((j, ray), hit)| {

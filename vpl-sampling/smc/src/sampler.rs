@@ -3,17 +3,18 @@
 use crate::config::{SmcConfig, SmcError};
 use crate::flux::{AreaProbes, FluxEstimator, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
-use crate::points::{CameraPoint, CandidateHit, camera_points, camera_sees, candidate_hits, mutual_ray, resolve};
+use crate::points::{CameraPoint, CandidateHit, camera_points_of, camera_sees, candidate_hits_from, mutual_ray, resolve};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
 use vpl_core::resample::resample_counted;
-use vpl_core::rng::mix64;
+use vpl_core::rng::{mix64, stream_key};
 use vpl_core::scene::LightingKey;
 use vpl_core::{
-    Camera, CpuRays, Frame, Purpose, RadiosityEstimator, RayCaster, Scene, Services, Stats, SurfacePoint, Vpl, VplSampler, VplSet, stream,
+    Camera, CameraRays, CpuRays, Frame, Purpose, RadiosityEstimator, RayCaster, Scene, Services, Stats, SurfacePoint, Vpl, VplSampler,
+    VplSet, stream,
 };
 use vpl_density::{KnnDensity, set_densities};
 use vpl_pathtrace::PathRadiosity;
@@ -277,9 +278,9 @@ impl SmcSampler {
         let start = Instant::now();
         let mut st = SmcStats { iterations: self.iterations + 1, ..SmcStats::default() };
         let mut tm = SmcTimings::default();
-        let xs = self.draw_camera_points(scene, camera, seed, &mut st, &mut tm);
+        let (rays_x, xs, from) = self.draw_camera_points(scene, camera, seed, &mut st, &mut tm);
         let valid = self.verify_indirect_visibility(scene, camera, &xs, seed, &mut st, &mut tm);
-        let candidates = self.draw_candidates(scene, &xs, seed, &mut st, &mut tm);
+        let candidates = self.draw_candidates(scene, &xs, (&rays_x, &from), seed, &mut st, &mut tm);
         let t0 = Instant::now();
         self.choose_removals(&candidates, &valid, &mut st);
         let added = self.fill_slots(candidates, &xs, &mut st);
@@ -302,13 +303,23 @@ impl SmcSampler {
     }
 
     /// Line 3: camera points X, from random raster positions.
-    fn draw_camera_points(&self, scene: &Scene, camera: &Camera, seed: u64, st: &mut SmcStats, tm: &mut SmcTimings) -> Vec<CameraPoint> {
+    /// The camera rays are kept with the index of the ray each point came
+    /// from: the candidate rays leave those points (line 5).
+    fn draw_camera_points<'c>(
+        &self,
+        scene: &Scene,
+        camera: &'c Camera,
+        seed: u64,
+        st: &mut SmcStats,
+        tm: &mut SmcTimings,
+    ) -> (CameraRays<'c>, Vec<CameraPoint>, Vec<u32>) {
         let t0 = Instant::now();
         let n_rays = self.config.vpls * self.config.resample_ratio;
-        let xs = camera_points(scene, camera, self.rays.as_ref(), n_rays, seed, self.iterations);
+        let batch = CameraRays::new(camera, stream_key(seed, self.iterations, Purpose::CAMERA_POINTS), n_rays);
+        let (xs, from) = camera_points_of(scene, self.rays.as_ref(), &batch);
         st.camera_points = xs.len();
         tm.candidates_ms += ms(t0);
-        xs
+        (batch, xs, from)
     }
 
     /// Line 4: INVALID ← Y \ indirectly visible VPLs. A VPL whose mailbox
@@ -381,11 +392,19 @@ impl SmcSampler {
     /// are resampled toward a uniform density over area (line 6); each
     /// candidate gets its radiosity, seeded by the id it keeps as a VPL
     /// (line 7), and its density against Y with k = 1 (line 8, §3.2.4).
-    fn draw_candidates(&mut self, scene: &Scene, xs: &[CameraPoint], seed: u64, st: &mut SmcStats, tm: &mut SmcTimings) -> Vec<Candidate> {
+    fn draw_candidates(
+        &mut self,
+        scene: &Scene,
+        xs: &[CameraPoint],
+        (rays_x, from): (&CameraRays, &[u32]),
+        seed: u64,
+        st: &mut SmcStats,
+        tm: &mut SmcTimings,
+    ) -> Vec<Candidate> {
         let (c, it) = (self.config, self.iterations);
         // Line 5: hits of rays from X.
         let t0 = Instant::now();
-        let hits = candidate_hits(scene, self.rays.as_ref(), xs, seed, it);
+        let hits = candidate_hits_from(scene, self.rays.as_ref(), xs, rays_x, from, seed, it);
         st.hits = hits.len();
         tm.candidates_ms += ms(t0);
 

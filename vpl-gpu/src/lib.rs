@@ -30,17 +30,19 @@
 //! batches, each one submission and one wait, and moves little in each:
 //!
 //! - camera rays are made on the device from the camera and one stream key
-//!   ([`vpl_core::CameraRays`]); other rays go up as 24 B (unbounded) or
-//!   28 B, and come back as the triangle hit (4 B, the host completes the
-//!   hit with its own triangle test) or one bit of occlusion;
+//!   ([`vpl_core::CameraRays`]), and rays that leave their hits from 8 B a
+//!   ray ([`vpl_core::BounceRays`]: SMC's candidates); other rays go up as
+//!   24 B (unbounded) or 28 B; hits come back as the triangle (4 B, the
+//!   host completes the hit with its own ray and triangle test), occlusion
+//!   as one bit;
 //! - radiosity paths draw the CPU's streams from one key a point and are
 //!   summed on the device (56 B up and 16 B back a point); the lights stay
 //!   on the device until they change;
 //! - rounds of visibility tests where the first pass wins are cast in one
 //!   batch ([`vpl_core::RayCaster::speculates`]), with the same answers.
 //!
-//! A steady SMC frame at 1920×1080 with 2048 VPLs on office moves 1.8 MB in
-//! 12 submissions (lavapipe; the counts do not depend on the device), where
+//! A steady SMC frame at 1920×1080 with 2048 VPLs on office moves 1.3 MB in
+//! 14 submissions (lavapipe; the counts do not depend on the device), where
 //! reading the G-buffer and image back moved 199 MB.
 //!
 //! ```no_run

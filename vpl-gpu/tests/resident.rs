@@ -15,7 +15,8 @@
 //!   kernels' parameters. Reading the G-buffer and image back instead moves
 //!   5 + 1 buffers of 16 B a pixel (199 MB). The step's share: its camera
 //!   rays made on the device (the camera and a key up, 4 B a ray back), its
-//!   candidate and shadow rays packed (24 or 28 B up, 4 B or one bit back),
+//!   candidate rays too, from the camera hits the device holds (8 B up, 4 B
+//!   back a ray), its shadow rays packed (28 B up, one bit back),
 //!   its radiosity paths summed on the device (56 B a point up, 16 B back),
 //!   and its rounds of visibility tests cast together; its kNN and flux
 //!   estimates run on the host.

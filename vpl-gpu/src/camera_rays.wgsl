@@ -1,9 +1,8 @@
 // Camera rays made on the device and cast: twin of vpl_core::CameraRays.
 // Ray j draws (u, v) and then the lens sample from stream j under the key,
 // and is the camera's ray through raster (u·w, v·h) (vpl_core::Camera::ray).
-// Closest hits come back as (t, scene triangle) pairs, or (`tri_only`) as
-// the triangles in words [0, count) and their t in [count, 2·count), so
-// that the triangles read back alone and the hits stay for `bounce`.
+// Closest hits come back as hits.wgsl writes them; with `tri_only` the
+// hits stay on the device for `bounce`.
 //
 // `bounce`: twin of vpl_core::BounceRays. Ray k leaves the hit of camera
 // ray origins[k].x (normals turned toward the camera, offset by eps along
@@ -89,13 +88,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         t = hit.t;
         tri = bvh_order[hit.prim];
     }
-    if (params.tri_only != 0u) {
-        hits[j] = tri;
-        hits[params.count + j] = bitcast<u32>(t);
-    } else {
-        hits[2u * j] = bitcast<u32>(t);
-        hits[2u * j + 1u] = tri;
-    }
+    write_hit(j, t, tri);
 }
 
 @compute @workgroup_size(64)

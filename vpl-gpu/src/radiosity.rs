@@ -121,15 +121,17 @@ impl GpuRadiosity {
             })
             .collect();
         let mut cached = self.lights.lock().expect("light buffers lock");
-        let rows =
-            (light_rows(scene), scene.light_distribution.cdf().to_vec(), scene.light_distribution.pmfs().to_vec(), scene.tri_light.clone());
-        if cached.as_ref().is_none_or(|c| c.rows != rows) {
+        let lights = light_rows(scene);
+        let (cdf, pmf) = (scene.light_distribution.cdf(), scene.light_distribution.pmfs());
+        // Compared in place: only an upload copies the rows.
+        let held = cached.as_ref().is_some_and(|c| c.rows.0 == lights && c.rows.1 == cdf && c.rows.2 == pmf && c.rows.3 == scene.tri_light);
+        if !held {
             *cached = Some(LightBuffers {
-                lights: storage_init(ctx, "lights", &rows.0),
-                cdf: storage_init(ctx, "light cdf", &rows.1),
-                pmf: storage_init(ctx, "light pmf", &rows.2),
-                tri_light: storage_init(ctx, "tri light", &rows.3),
-                rows,
+                lights: storage_init(ctx, "lights", &lights),
+                cdf: storage_init(ctx, "light cdf", cdf),
+                pmf: storage_init(ctx, "light pmf", pmf),
+                tri_light: storage_init(ctx, "tri light", &scene.tri_light),
+                rows: (lights, cdf.to_vec(), pmf.to_vec(), scene.tri_light.clone()),
             });
         }
         let lb = cached.as_ref().expect("light buffers just made");

@@ -58,6 +58,9 @@ impl KeptCamera {
 
 const WORKGROUP: u32 = 64;
 
+/// How the closest-hit kernels write their answers.
+const HITS_WGSL: &str = include_str!("hits.wgsl");
+
 /// What a batch brings back.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Answer {
@@ -101,11 +104,11 @@ impl GpuRayCaster {
     pub fn new(ctx: &GpuContext) -> GpuRayCaster {
         let scene = scene_layout(ctx);
         let layout = layout(ctx, "raycast", &[Binding::Uniform, Binding::Read, Binding::ReadWrite, Binding::ReadWrite]);
-        let source = format!("{BVH_WGSL}\n{}", include_str!("raycast.wgsl"));
+        let source = format!("{BVH_WGSL}\n{HITS_WGSL}\n{}", include_str!("raycast.wgsl"));
         let closest = pipeline(ctx, "closest", &source, "closest", &[&scene, &layout]);
         let any_hit = pipeline(ctx, "any_hit", &source, "any_hit", &[&scene, &layout]);
         let camera_layout = crate::kernel::layout(ctx, "camera rays", &[Binding::Uniform, Binding::ReadWrite]);
-        let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}", include_str!("camera_rays.wgsl"));
+        let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{HITS_WGSL}\n{}", include_str!("camera_rays.wgsl"));
         let camera = pipeline(ctx, "camera rays", &source, "main", &[&scene, &camera_layout]);
         let (u, r, w) = (Binding::Uniform, Binding::Read, Binding::ReadWrite);
         let bounce_layout = crate::kernel::layout(ctx, "bounce rays", &[u, w, u, r, w]);
@@ -140,7 +143,8 @@ impl GpuRayCaster {
             Answer::Occlusion => n.div_ceil(32),
         };
         // New buffers start zeroed: the occlusion bits are set, never cleared.
-        let (hits_size, blocked_size) = if answer == Answer::Occlusion { (16, words as u64 * 4) } else { (words as u64 * 4, 16) };
+        // Hits take 2n words either way (hits.wgsl); triangles read back the first n.
+        let (hits_size, blocked_size) = if answer == Answer::Occlusion { (16, words as u64 * 4) } else { (2 * n as u64 * 4, 16) };
         let b_hits = storage(ctx, "hits", hits_size)?;
         let b_blocked = storage(ctx, "blocked", blocked_size)?;
         let group = bind(ctx, "raycast", &self.layout, &[&b_params, &b_rays, &b_hits, &b_blocked]);

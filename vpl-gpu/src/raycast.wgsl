@@ -1,8 +1,7 @@
 // Batch ray casting: one invocation a ray. Rays are `stride` floats each:
 // origin, direction and, for a stride of 7, t_max (6: unbounded). Closest
-// hits come back as (t, scene triangle) pairs, or (`tri_only`) as the
-// triangle alone (NONE for a miss); occlusion as one bit a ray (bit i % 32
-// of word i / 32), so an occlusion batch reads back n / 8 bytes.
+// hits come back as hits.wgsl writes them; occlusion as one bit a ray
+// (bit i % 32 of word i / 32), so an occlusion batch reads back n / 8 bytes.
 
 struct Params {
     count: u32,
@@ -27,16 +26,6 @@ fn ray_at(i: u32) -> RayIn {
     var t_max = NO_HIT;
     if (params.stride == 7u) { t_max = rays[k + 6u]; }
     return RayIn(vec3<f32>(rays[k], rays[k + 1u], rays[k + 2u]), vec3<f32>(rays[k + 3u], rays[k + 4u], rays[k + 5u]), t_max);
-}
-
-// Writes the closest hit of ray i: (t, scene triangle) or the triangle alone.
-fn write_hit(i: u32, t: f32, tri: u32) {
-    if (params.tri_only != 0u) {
-        hits[i] = tri;
-    } else {
-        hits[2u * i] = bitcast<u32>(t);
-        hits[2u * i + 1u] = tri;
-    }
 }
 
 @compute @workgroup_size(64)

@@ -54,6 +54,12 @@ fn parse_clamp(value: &Bound<'_, PyAny>) -> PyResult<Clamp> {
     Ok(Clamp::Value(GeometryClamp::new(g)))
 }
 
+/// `image` as an array: its pixels where they are on the host, else the
+/// frame's image read back from the device on request.
+fn host_or_read<'py>(py: Python<'py>, renderer: &Renderer, image: &vpl_render::vpl_core::Image) -> Option<Bound<'py, PyArray3<f32>>> {
+    if image.on_host() { Some(to_array(py, image)) } else { renderer.read_image().map(|i| to_array(py, &i)) }
+}
+
 fn backend_named(name: &str) -> PyResult<Box<dyn Backend>> {
     match name {
         "cpu" => Ok(Box::new(CpuBackend)),
@@ -222,11 +228,7 @@ impl PyRenderer {
     /// None before the first frame.
     fn image<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
         let state = self.state.try_lock().map_err(|_| vpl_err("the renderer is busy"))?;
-        let Some(last) = &state.last else { return Ok(None) };
-        if last.out.image.on_host() {
-            return Ok(Some(to_array(py, &last.out.image)));
-        }
-        Ok(state.renderer.read_image().map(|i| to_array(py, &i)))
+        Ok(state.last.as_ref().and_then(|l| host_or_read(py, &state.renderer, &l.out.image)))
     }
 
     /// The VPLs of the last frame as a NumPy structured array, one row per
@@ -313,12 +315,8 @@ impl PyRenderer {
     /// (height, width, 3), or None before a frame or in `direct` mode.
     fn indirect<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
         let state = self.state.try_lock().map_err(|_| vpl_err("the renderer is busy"))?;
-        let Some(indirect) = state.last.as_ref().and_then(|l| l.out.indirect.as_ref()) else { return Ok(None) };
-        if indirect.on_host() {
-            return Ok(Some(to_array(py, indirect)));
-        }
-        // Left on the device: an indirect frame, whose image is its indirect light.
-        Ok(state.renderer.read_image().map(|i| to_array(py, &i)))
+        // Left on the device only by an indirect frame, whose image is its indirect light.
+        Ok(state.last.as_ref().and_then(|l| l.out.indirect.as_ref()).and_then(|i| host_or_read(py, &state.renderer, i)))
     }
 
     /// The sampler's name (a registry name, or the Python sampler's class).

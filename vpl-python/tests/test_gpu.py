@@ -10,6 +10,17 @@ import pytest
 import vpl
 
 
+def gpu_renderer(scene, **kw):
+    """A renderer on the GPU backend; skips the test where no adapter exists
+    unless VPL_REQUIRE_GPU=1, where that fails it."""
+    try:
+        return vpl.Renderer(scene, backend="gpu", **kw)
+    except vpl.VplError as e:
+        if os.environ.get("VPL_REQUIRE_GPU") == "1":
+            raise
+        pytest.skip(f"no GPU adapter: {e}")
+
+
 def test_gpu_frames_match_the_cpu_frames():
     """The tolerance of the Rust backend test: Σ|gpu − cpu|² / Σ|cpu|² ≤
     1e-6 per frame (the kernels round differently; one VPL of 256 moved
@@ -18,12 +29,7 @@ def test_gpu_frames_match_the_cpu_frames():
     edges and take the other triangle, as the G-buffer twin test allows)."""
     office = vpl.Scene.load("office")
     kw = dict(sampler="ir", vpls=256, size=(48, 27), mode="indirect", visibility="raytraced", seed=3)
-    try:
-        g = vpl.Renderer(office, backend="gpu", **kw)
-    except vpl.VplError as e:
-        if os.environ.get("VPL_REQUIRE_GPU") == "1":
-            raise
-        pytest.skip(f"no GPU adapter: {e}")
+    g = gpu_renderer(office, **kw)
     assert g.backend == "gpu" and g.device
     c = vpl.Renderer(office, backend="cpu", **kw)
     for f in (0, 10):
@@ -40,13 +46,8 @@ def test_gpu_frames_stay_on_the_device_until_asked():
     bit (the same kernels on the same inputs)."""
     office = vpl.Scene.load("office")
     kw = dict(sampler="smc", vpls=256, size=(48, 27), mode="indirect", seed=5)
-    try:
-        lazy = vpl.Renderer(office, backend="gpu", **kw)
-    except vpl.VplError as e:
-        if os.environ.get("VPL_REQUIRE_GPU") == "1":
-            raise
-        pytest.skip(f"no GPU adapter: {e}")
-    eager = vpl.Renderer(office, backend="gpu", **kw)
+    lazy = gpu_renderer(office, **kw)
+    eager = gpu_renderer(office, **kw)
     for f in (0, 1):
         assert lazy.frame(f, image=False) is None
         want = eager.frame(f)

@@ -204,10 +204,44 @@ fn view_mean(p: &Png, view: [usize; 4], hole: Option<[usize; 4]>) -> f64 {
 
 #[test]
 fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
+    picks_references_and_records(&[]);
+}
+
+/// The same session on frames that stay on the GPU (indirect light only):
+/// the window composes them on the renderer's device, and the pick, the
+/// reference and the difference read back only what they need. On the CPU
+/// (no adapter) it is the session above, unless VPL_REQUIRE_GPU=1.
+#[test]
+fn a_session_on_frames_left_on_the_device_composes_them_there() {
+    let Some(stderr) = picks_references_and_records(&["--mode", "indirect"]) else { return };
+    if !stderr.contains("renderer: GPU") {
+        assert!(std::env::var("VPL_REQUIRE_GPU").is_err(), "VPL_REQUIRE_GPU=1 and the viewer ran on the CPU: {stderr}");
+        return;
+    }
+    let composed = stderr
+        .split(" of them composed on the device")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse::<u64>().ok())
+        .unwrap_or_else(|| panic!("the count of views composed on the device in {stderr}"));
+    let shown = stderr
+        .split(" frames shown")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse::<u64>().ok())
+        .unwrap_or_else(|| panic!("the count of frames in {stderr}"));
+    // Every frame of the session composes on the device (some twice: a
+    // change of overlay or channel recomposes the frame shown).
+    assert!(composed >= shown, "{composed} views composed on the device for {shown} frames: {stderr}");
+}
+
+/// Runs the picking session with `extra` arguments and checks what it
+/// shows; answers its stderr (`None`: skipped, no display).
+fn picks_references_and_records(extra: &[&str]) -> Option<String> {
     if !has_display() {
         assert!(std::env::var("VPL_REQUIRE_DISPLAY").is_err(), "VPL_REQUIRE_DISPLAY is set and there is no display");
         eprintln!("skipped: no display (DISPLAY or WAYLAND_DISPLAY); CI runs this under Xvfb");
-        return;
+        return None;
     }
     let dir = tempfile::tempdir().unwrap();
     let shot = |name: &str| dir.path().join(name);
@@ -228,11 +262,12 @@ fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
     std::fs::write(&script_path, script).unwrap();
     let out = vpl()
         .args(["view", "--scene", "office", "--window", "800x450", "--vpls", "64"])
+        .args(extra)
         .arg("--script")
         .arg(&script_path)
         .output()
         .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "vpl view failed: {stderr}");
     eprintln!("{stderr}");
     let png = |n: &str| Png::read(&shot(&format!("{n}.png")));
@@ -291,6 +326,7 @@ fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
         seq.camera.len(),
         seq.duration
     );
+    Some(stderr)
 }
 
 /// `vpl view` with `display` as `DISPLAY` (none: unset; then on the

@@ -199,4 +199,21 @@ pub trait IndirectShader: Send {
     fn read_image(&self) -> Option<Image> {
         None
     }
+    /// Whether [`IndirectShader::finish_on_device`] can add the light paths
+    /// a frame keeps besides the VPLs' to an image left on the device, so
+    /// that a frame of every light path stays there. `false` by default.
+    fn finishes_on_device(&self) -> bool {
+        false
+    }
+    /// Adds to the image the last shade left on the device the G-buffer's
+    /// emission (paths of k = 0: emitters and the environment seen
+    /// directly) when `emission`, and the direct light (k = 1) when
+    /// `direct` is `Some((samples, seed))`: `samples` light samples a pixel
+    /// drawn from the streams the host's direct light draws from
+    /// (`stream(seed, 0, Purpose::DIRECT, pixel)`). Answers whether it did;
+    /// `false` where no image is on the device.
+    fn finish_on_device(&mut self, scene: &crate::Scene, emission: bool, direct: Option<(u32, u64)>) -> bool {
+        let _ = (scene, emission, direct);
+        false
+    }
 }

@@ -3,7 +3,7 @@
 //! kernels, and the rays and radiosity estimates of samplers that take them
 //! (SMC). The rest of sampling and the direct light stay on the CPU.
 
-use crate::{Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps};
+use crate::{Frames, Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps};
 use std::sync::Arc;
 use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, SharedEstimator, VplVisibility};
 use vpl_pathtrace::PathRadiosity;
@@ -13,6 +13,7 @@ use vpl_render::{Backend, RenderError, ShadingSpec, VisibilitySpec};
 #[derive(Clone)]
 pub struct GpuBackend {
     gpu: Gpu,
+    frames: Frames,
 }
 
 impl std::fmt::Debug for GpuBackend {
@@ -34,7 +35,14 @@ fn err(e: impl std::fmt::Display) -> RenderError {
 impl GpuBackend {
     /// The backend on `gpu`.
     pub fn new(gpu: Gpu) -> GpuBackend {
-        GpuBackend { gpu }
+        GpuBackend { gpu, frames: Frames::default() }
+    }
+
+    /// Where the shaders this backend makes publish the frames they leave
+    /// on the device (`vpl_render::ReadBack::Nothing`): a window on the
+    /// same device shows them from there, with no read-back.
+    pub fn frames(&self) -> Frames {
+        self.frames.clone()
     }
 
     /// The device handle.
@@ -121,12 +129,17 @@ impl Backend for GpuBackend {
 
     fn shader(&self, spec: ShadingSpec, clamp: Option<GeometryClamp>, seed: u64) -> Result<Box<dyn IndirectShader>, RenderError> {
         Ok(match spec {
-            ShadingSpec::Exhaustive => Box::new(GpuInterleavedShader::exhaustive(self.gpu.clone(), clamp)),
+            ShadingSpec::Exhaustive => {
+                let mut s = GpuInterleavedShader::exhaustive(self.gpu.clone(), clamp);
+                s.publish_to(self.frames.clone());
+                Box::new(s)
+            }
             ShadingSpec::Interleaved { filter } => {
                 let mut s = GpuInterleavedShader::new(self.gpu.clone(), clamp, seed);
                 if !filter {
                     s.cpu.filter = None;
                 }
+                s.publish_to(self.frames.clone());
                 Box::new(s)
             }
         })

@@ -30,6 +30,11 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     /// What the adapter is.
     pub info: wgpu::AdapterInfo,
+    /// The instance the adapter came from: a window's surface made from it
+    /// can present what the kernels leave on this device.
+    pub instance: wgpu::Instance,
+    /// The adapter.
+    pub adapter: wgpu::Adapter,
     counters: Counters,
 }
 
@@ -106,14 +111,14 @@ impl GpuContext {
         for backends in tries {
             let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends, ..Default::default() });
             match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())) {
-                Ok(adapter) => return Self::open(adapter),
+                Ok(adapter) => return Self::open(instance, adapter),
                 Err(e) => why.push(format!("{backends:?}: {e}")),
             }
         }
         Err(GpuError::NoAdapter(why.join("; ")))
     }
 
-    fn open(adapter: wgpu::Adapter) -> Result<GpuContext, GpuError> {
+    fn open(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<GpuContext, GpuError> {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("vpl-gpu"),
@@ -121,7 +126,7 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(GpuContext { device, queue, info, counters: Counters::default() })
+        Ok(GpuContext { device, queue, info, instance, adapter, counters: Counters::default() })
     }
 
     /// What has crossed between host and device so far.

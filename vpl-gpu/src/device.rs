@@ -21,6 +21,7 @@ struct Inner {
     scene: Mutex<SceneCache>,
     gbuffer_kernel: OnceLock<GpuGBufferRenderer>,
     filter_kernel: OnceLock<FilterKernel>,
+    change_kernel: OnceLock<crate::frame::ChangeKernel>,
     resident: Mutex<Option<Resident>>,
     gbuffer_ms: Mutex<(f64, f64)>,
 }
@@ -72,6 +73,7 @@ impl Gpu {
             scene: Mutex::new(SceneCache::default()),
             gbuffer_kernel: OnceLock::new(),
             filter_kernel: OnceLock::new(),
+            change_kernel: OnceLock::new(),
             resident: Mutex::new(None),
             gbuffer_ms: Mutex::new((0.0, 0.0)),
         }))
@@ -99,6 +101,10 @@ impl Gpu {
 
     pub(crate) fn filter_kernel(&self) -> &FilterKernel {
         self.0.filter_kernel.get_or_init(|| FilterKernel::new(&self.0.ctx))
+    }
+
+    pub(crate) fn change_kernel(&self) -> &crate::frame::ChangeKernel {
+        self.0.change_kernel.get_or_init(|| crate::frame::ChangeKernel::new(&self.0.ctx))
     }
 
     /// Records that `host` is the read-back of `device`, or (`None`) that

@@ -34,6 +34,23 @@ fn pixels(gbuf_w: u32, gbuf_h: u32) -> usize {
 }
 
 impl DeviceGBuffer {
+    /// Positions (xyz) and whether the surface reflects (w: 1 or 0), one
+    /// `vec4<f32>` a pixel.
+    pub fn pos(&self) -> &wgpu::Buffer {
+        &self.pos
+    }
+
+    /// Shading normals (xyz) and the distance along the camera ray (w; 3·10³⁸
+    /// where the ray missed).
+    pub fn normal(&self) -> &wgpu::Buffer {
+        &self.normal
+    }
+
+    /// Diffuse albedo (xyz).
+    pub fn albedo(&self) -> &wgpu::Buffer {
+        &self.albedo
+    }
+
     fn empty(ctx: &GpuContext, width: u32, height: u32, pixel_angle: f32, eye: Vec3) -> Result<DeviceGBuffer, GpuError> {
         let size = pixels(width, height) as u64 * 16;
         Ok(DeviceGBuffer {

@@ -3,6 +3,7 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
+use crate::frame::{DeviceFrame, Frames};
 use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::raytraced::GpuRayTraced;
 use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
@@ -89,6 +90,8 @@ pub struct GpuInterleavedShader {
     profile: bool,
     /// The last image left on the device: its size and buffer.
     kept: Option<(u32, u32, wgpu::Buffer)>,
+    /// Where images left on the device are published, with their G-buffer.
+    publish: Option<Frames>,
 }
 
 impl GpuInterleavedShader {
@@ -106,7 +109,16 @@ impl GpuInterleavedShader {
             keep: false,
             profile: false,
             kept: None,
+            publish: None,
         }
+    }
+
+    /// Publishes each image left on the device (under
+    /// [`IndirectShader::keep_on_device`]) to `frames`, with the G-buffer
+    /// it was shaded over, for a window on the same device to show; a
+    /// frame read back publishes `None`.
+    pub fn publish_to(&mut self, frames: Frames) {
+        self.publish = Some(frames);
     }
 
     /// Submits and waits for the gather and the filter apart, so that
@@ -280,10 +292,16 @@ impl GpuInterleavedShader {
         self.device_timings =
             GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
         if self.keep {
+            if let Some(f) = &self.publish {
+                f.publish(Some(DeviceFrame::new(gbuf.width, gbuf.height, b_out.clone(), g.clone())));
+            }
             self.kept = Some((gbuf.width, gbuf.height, b_out));
             return Ok(Image::on_device(gbuf.width, gbuf.height));
         }
         self.kept = None;
+        if let Some(f) = &self.publish {
+            f.publish(None);
+        }
         Ok(image_of(gbuf.width, gbuf.height, out))
     }
 }
@@ -323,6 +341,9 @@ impl IndirectShader for GpuInterleavedShader {
     /// When the device fails.
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
         self.kept = None;
+        if let Some(f) = &self.publish {
+            f.publish(None);
+        }
         let host;
         let gbuf = match self.shade_on_device(gbuf, vpls, vis) {
             Some(Ok(img)) => return img,

@@ -1,5 +1,7 @@
 //! What every kernel needs: explicit bind-group layouts, pipelines, buffers
-//! and read-back.
+//! and read-back, with the traffic counted on the [`GpuContext`]. Public so
+//! that a program's own kernels (a viewer's compositing, say) run on the
+//! toolkit's device the same way.
 
 use crate::context::{GpuContext, GpuError};
 use wgpu::util::DeviceExt;
@@ -10,7 +12,7 @@ pub(crate) const SAMPLING_WGSL: &str = include_str!("sampling.wgsl");
 
 /// How a kernel binds one buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Binding {
+pub enum Binding {
     /// `var<uniform>`.
     Uniform,
     /// `var<storage, read>`.
@@ -20,7 +22,7 @@ pub(crate) enum Binding {
 }
 
 /// A bind-group layout whose binding `i` is `kinds[i]`, visible to compute.
-pub(crate) fn layout(ctx: &GpuContext, label: &str, kinds: &[Binding]) -> wgpu::BindGroupLayout {
+pub fn layout(ctx: &GpuContext, label: &str, kinds: &[Binding]) -> wgpu::BindGroupLayout {
     let entries: Vec<wgpu::BindGroupLayoutEntry> = kinds
         .iter()
         .enumerate()
@@ -43,7 +45,7 @@ pub(crate) fn layout(ctx: &GpuContext, label: &str, kinds: &[Binding]) -> wgpu::
 }
 
 /// A bind group over `layout` binding `buffers[i]` at binding `i`.
-pub(crate) fn bind(ctx: &GpuContext, label: &str, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+pub fn bind(ctx: &GpuContext, label: &str, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> =
         buffers.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() }).collect();
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
@@ -51,13 +53,7 @@ pub(crate) fn bind(ctx: &GpuContext, label: &str, layout: &wgpu::BindGroupLayout
 
 /// A compute pipeline: WGSL `source`, entry point `entry`, bind groups
 /// `layouts` (group i is `layouts[i]`).
-pub(crate) fn pipeline(
-    ctx: &GpuContext,
-    label: &str,
-    source: &str,
-    entry: &str,
-    layouts: &[&wgpu::BindGroupLayout],
-) -> wgpu::ComputePipeline {
+pub fn pipeline(ctx: &GpuContext, label: &str, source: &str, entry: &str, layouts: &[&wgpu::BindGroupLayout]) -> wgpu::ComputePipeline {
     let d = &ctx.device;
     let module =
         d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) });
@@ -77,7 +73,7 @@ pub(crate) fn pipeline(
 }
 
 /// A storage buffer holding `data` (at least 16 bytes, so empty inputs bind).
-pub(crate) fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
+pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
     let bytes: &[u8] = bytemuck::cast_slice(data);
     let padded;
     let contents = if bytes.len() < 16 {
@@ -95,7 +91,7 @@ pub(crate) fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data
 }
 
 /// A uniform buffer holding `value`.
-pub(crate) fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+pub fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
     ctx.note_upload(std::mem::size_of::<T>() as u64);
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
@@ -106,7 +102,7 @@ pub(crate) fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T
 
 /// A zeroed storage buffer of `size` bytes (at least 16) that kernels write
 /// and that can be copied out.
-pub(crate) fn storage(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::Buffer, GpuError> {
+pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::Buffer, GpuError> {
     let size = size.max(16).next_multiple_of(4);
     let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
     if size > limit {
@@ -121,12 +117,7 @@ pub(crate) fn storage(ctx: &GpuContext, label: &str, size: u64) -> Result<wgpu::
 }
 
 /// Records one dispatch of `pipeline` with bind groups `groups`.
-pub(crate) fn dispatch(
-    enc: &mut wgpu::CommandEncoder,
-    pipeline: &wgpu::ComputePipeline,
-    groups: &[&wgpu::BindGroup],
-    size: (u32, u32, u32),
-) {
+pub fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, groups: &[&wgpu::BindGroup], size: (u32, u32, u32)) {
     if size.0 == 0 || size.1 == 0 || size.2 == 0 {
         return;
     }
@@ -141,28 +132,28 @@ pub(crate) fn dispatch(
 /// Workgroups of `size` invocations that cover `n` items, laid out in 2D
 /// when one dimension would exceed the adapter's limit. Kernels rebuild the
 /// item index as `id.x + id.y * groups.0 * size`.
-pub(crate) fn groups_1d(ctx: &GpuContext, n: u64, size: u32) -> (u32, u32, u32) {
+pub fn groups_1d(ctx: &GpuContext, n: u64, size: u32) -> (u32, u32, u32) {
     let groups = n.div_ceil(size as u64);
     let max = ctx.device.limits().max_compute_workgroups_per_dimension as u64;
     if groups <= max { (groups as u32, 1, 1) } else { (max as u32, groups.div_ceil(max) as u32, 1) }
 }
 
 /// Submits `enc` and waits for the device.
-pub(crate) fn finish(ctx: &GpuContext, enc: wgpu::CommandEncoder) -> Result<(), GpuError> {
+pub fn finish(ctx: &GpuContext, enc: wgpu::CommandEncoder) -> Result<(), GpuError> {
     ctx.submit([enc.finish()]);
     ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::ReadBack(e.to_string()))?;
     Ok(())
 }
 
 /// Copies the first `count` elements of `buffer` back to the host.
-pub(crate) fn read_back<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>, GpuError> {
+pub fn read_back<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>, GpuError> {
     finish_read(ctx, ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read-back") }), buffer, count)
 }
 
 /// Ends `enc` with a copy of the first `count` elements of `buffer` to the
 /// host, submits it and waits: the kernels `enc` recorded and their
 /// read-back cross in one submission and one wait.
-pub(crate) fn finish_read<T: bytemuck::Pod>(
+pub fn finish_read<T: bytemuck::Pod>(
     ctx: &GpuContext,
     mut enc: wgpu::CommandEncoder,
     buffer: &wgpu::Buffer,

@@ -45,6 +45,13 @@
 //! 14 submissions (lavapipe; the counts do not depend on the device), where
 //! reading the G-buffer and image back moved 199 MB.
 //!
+//! A frame left on the device is published, with its G-buffer, to the
+//! backend's [`Frames`] ([`GpuBackend::frames`]): a window on the same
+//! device ([`GpuContext::instance`], [`GpuContext::adapter`]) draws it from
+//! there ([`DeviceFrame`]), and [`Gpu::temporal_change`] reduces the
+//! frame-to-frame change Σ|ΔL|/ΣL on the device (2 KiB back). The
+//! [`kernel`] helpers run a program's own kernels the same way, counted.
+//!
 //! ```no_run
 //! use vpl_core::{GeometryClamp, IndirectShader, SceneSetup, Vpl, VplSet, VplVisibility};
 //! use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps};
@@ -85,9 +92,10 @@ mod backend;
 mod context;
 mod device;
 mod filter;
+mod frame;
 mod gbuffer;
 mod interleaved;
-mod kernel;
+pub mod kernel;
 mod radiosity;
 mod raycast;
 mod raytraced;
@@ -98,6 +106,7 @@ pub use backend::{GpuBackend, backend};
 pub use context::{GpuContext, GpuError, Traffic};
 pub use device::Gpu;
 pub use filter::GpuCrossBilateral;
+pub use frame::{DeviceFrame, Frames};
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use interleaved::{GpuInterleavedShader, GpuShadeTimings};
 pub use radiosity::GpuRadiosity;

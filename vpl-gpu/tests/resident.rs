@@ -127,3 +127,65 @@ fn a_steady_1080p_smc_frame_moves_little_besides_the_sampler() {
     assert_eq!((image.width, image.height, t.reads), (1920, 1080, 1));
     assert_eq!(t.bytes_down, 1920 * 1080 * 16);
 }
+
+/// The host's Σ|ΔL| / ΣL, as the viewer plots it.
+fn change_on_host(a: &vpl_core::Image, b: &vpl_core::Image) -> f64 {
+    let (mut diff, mut sum) = (0.0f64, 0.0f64);
+    for (p, q) in a.data.iter().zip(&b.data) {
+        diff += (*q - *p).abs().element_sum() as f64;
+        sum += q.element_sum().max(0.0) as f64;
+    }
+    diff / sum
+}
+
+#[test]
+fn frames_left_on_the_device_are_published_and_their_change_is_reduced_there() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("office").unwrap();
+    let camera = setup.camera.with_resolution((200, 150)).unwrap();
+    let backend = GpuBackend::new(gpu.clone());
+    let frames = backend.frames();
+    let mut r = Renderer::builder(&setup.scene)
+        .vpls(128)
+        .sampler("smc")
+        .mode(Mode::Indirect)
+        .seed(3)
+        .read_back(ReadBack::Nothing)
+        .backend(backend)
+        .build()
+        .unwrap();
+    assert!(frames.latest().is_none(), "nothing published before the first frame");
+    let mut kept = Vec::new();
+    for f in 0..3 {
+        r.render(&setup.scene, &camera, f, 0.0).unwrap();
+        let frame = frames.latest().expect("the frame was published");
+        assert_eq!((frame.width, frame.height), (200, 150));
+        // What was published is the renderer's image and G-buffer.
+        let image = frame.read_image(gpu.ctx()).unwrap();
+        assert!(image.data == r.read_image().unwrap().data, "frame {f}: the published image is the renderer's");
+        let g = frame.read_gbuffer(gpu.ctx()).unwrap();
+        assert_eq!((g.width, g.height), (200, 150));
+        kept.push((frame, image));
+    }
+    // A frame held stays as it was while later frames render.
+    assert!(kept[0].0.read_image(gpu.ctx()).unwrap().data == kept[0].1.data, "a held frame was overwritten");
+    for w in kept.windows(2) {
+        let ((a, ia), (b, ib)) = (&w[0], &w[1]);
+        let before = gpu.traffic();
+        let device = gpu.temporal_change(a, b).unwrap().expect("a lit frame");
+        let t = gpu.traffic() - before;
+        let host = change_on_host(ia, ib);
+        // f32 partial sums of ≤ 2 pixels each (30,000 pixels over 65,536
+        // threads) added in f64: a few ulps of f32 relative.
+        assert!((device - host).abs() <= 1e-5 * host.max(1e-6), "change {device} on the device, {host} on the host");
+        assert!(host > 0.0, "SMC frames differ from frame to frame");
+        assert_eq!((t.reads, t.bytes_down, t.submissions), (1, 2048, 1), "{t}");
+    }
+    // Same frame against itself: no change.
+    assert_eq!(gpu.temporal_change(&kept[1].0, &kept[1].0).unwrap(), Some(0.0));
+    // Read back instead: nothing is published.
+    r.set_read_back(ReadBack::All);
+    r.render(&setup.scene, &camera, 3, 0.0).unwrap();
+    assert!(frames.latest().is_none(), "a frame read back is not published");
+}

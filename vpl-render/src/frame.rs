@@ -228,13 +228,42 @@ pub fn render_frame_cancellable_on(
             cancelled,
         };
     }
-    if s.mode.includes(0, s.max_depth) {
+    // A frame left on the device is finished there: emission and direct
+    // light added by the shader's device (the renderer keeps a frame there
+    // only when it can).
+    let emission = s.mode.includes(0, s.max_depth);
+    let direct = s.mode.includes(1, s.max_depth);
+    if !image.on_host() {
+        if emission || direct {
+            let t0 = Instant::now();
+            let done = shader.finish_on_device(scene, emission, direct.then_some((s.direct_samples, s.seed)));
+            t.direct_ms = ms(t0);
+            if !done {
+                note(&mut non_finite, "the frame's emission and direct light (not added on the device)", 1);
+            }
+        }
+        t.total_ms = ms(start) + gbuffer_ms;
+        return FrameOutput {
+            image,
+            gbuffer,
+            timings: t,
+            visibility,
+            moved,
+            stored,
+            vpls: vpl_set,
+            sampler_stats,
+            indirect,
+            non_finite,
+            cancelled,
+        };
+    }
+    if emission {
         note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
         for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
             *o += g.emitted;
         }
     }
-    if s.mode.includes(1, s.max_depth) {
+    if direct {
         let t0 = Instant::now();
         let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
         t.direct_ms = ms(t0);

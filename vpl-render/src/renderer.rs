@@ -319,8 +319,11 @@ impl Renderer {
         // The frame stays on the device where every stage runs there (see
         // ReadBack): the G-buffer is not read back, nor, under
         // ReadBack::Nothing, the image.
+        // Emission and direct light are added on the device where the
+        // shader can; else only an indirect frame stays there.
+        let finishes = self.mode == Mode::Indirect || (self.mode != Mode::Direct && shader.finishes_on_device());
         let resident = self.read_back != ReadBack::All
-            && self.mode == Mode::Indirect
+            && finishes
             && compensation.is_none()
             && !self.sampler.reads_previous_image()
             && shader.on_device(self.visibility.as_ref());

@@ -84,8 +84,9 @@ impl From<Option<GeometryClamp>> for Clamp {
 /// CPU backend has everything on the host and ignores it.
 ///
 /// A frame stays on the device only where every stage of it can: indirect
-/// light only ([`vpl_core::Mode::Indirect`]; emission and the direct light
-/// read the G-buffer on the host), no bias compensation, a shader and
+/// light, or emission and direct light too where the shader adds them on
+/// the device ([`vpl_core::IndirectShader::finishes_on_device`]; not
+/// [`vpl_core::Mode::Direct`] alone), no bias compensation, a shader and
 /// visibility on the device, and a sampler that does not read the previous
 /// image. Otherwise the frame reads back what its host stages need, as
 /// with [`ReadBack::All`].

@@ -48,6 +48,14 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     #[cfg(target_os = "linux")]
     let system = crate::display::from_env().map_err(ViewerError::NoDisplay)?;
     let (backend, renderer_line, default_scale) = choose_backend(options.backend)?;
+    // The window presents the renderer's frames from its device when it can.
+    #[cfg(feature = "gpu")]
+    let shared = match &backend {
+        BackendChoice::Gpu(gpu) => Some(gpu.clone()),
+        BackendChoice::Cpu => None,
+    };
+    #[cfg(not(feature = "gpu"))]
+    let shared = None;
     let mut builder = EventLoop::<Wake>::with_user_event();
     // A library call may come from any thread (a test, a notebook's worker);
     // X11 and Wayland allow it (macOS does not: call from the main thread there).
@@ -76,10 +84,10 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
         })
         .map_err(|e| ViewerError::Render(format!("cannot start the render thread: {e}")))?;
     let scale = options.scale.unwrap_or(default_scale);
-    let mut app = App { gfx: None, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
+    let mut app = App { gfx: None, shared, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
     app.st.scene_dir = scene_dir(&app.st.scene_spec);
     let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)));
-    let App { st, gfx } = app;
+    let App { st, gfx, .. } = app;
     drop(gfx);
     if let Some((_, cancel, _)) = &st.in_flight {
         cancel.store(true, Ordering::Relaxed);
@@ -128,8 +136,16 @@ fn choose_backend(req: BackendRequest) -> Result<(BackendChoice, String, f32), V
 
 struct App {
     gfx: Option<Gfx>,
+    /// The renderer's device, which the window presents from when its
+    /// surface can.
+    shared: Option<SharedGpu>,
     st: State,
 }
+
+#[cfg(feature = "gpu")]
+type SharedGpu = vpl_gpu::Gpu;
+#[cfg(not(feature = "gpu"))]
+type SharedGpu = std::convert::Infallible;
 
 /// The window and what draws into it.
 struct Gfx {
@@ -140,12 +156,30 @@ struct Gfx {
     config: wgpu::SurfaceConfiguration,
     egui: egui_winit::State,
     painter: egui_wgpu::Renderer,
+    /// The view composed on the renderer's device, when the window shares it.
+    #[cfg(feature = "gpu")]
+    device_view: Option<crate::present::WindowView>,
 }
 
 impl Gfx {
-    fn new(el: &ActiveEventLoop, size: (u32, u32), title: &str) -> Result<Gfx, ViewerError> {
+    /// The window, on `shared` (the renderer's device) when a surface of
+    /// the window can present from it, else on a device of its own.
+    fn new(el: &ActiveEventLoop, size: (u32, u32), title: &str, shared: Option<&SharedGpu>) -> Result<Gfx, ViewerError> {
         let attrs = Window::default_attributes().with_title(title).with_inner_size(winit::dpi::PhysicalSize::new(size.0, size.1));
         let window = Arc::new(el.create_window(attrs).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)))?);
+        #[cfg(feature = "gpu")]
+        if let Some(gpu) = shared {
+            let ctx = gpu.ctx();
+            if let Ok(surface) = ctx.instance.create_surface(window.clone())
+                && ctx.adapter.is_surface_supported(&surface)
+            {
+                let mut g = Gfx::on(window, surface, &ctx.adapter, ctx.device.clone(), ctx.queue.clone())?;
+                g.device_view = Some(crate::present::WindowView::new(gpu.clone()));
+                return Ok(g);
+            }
+        }
+        #[cfg(not(feature = "gpu"))]
+        let _ = shared;
         let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY | wgpu::Backends::GL);
         let instance = wgpu::Instance::new(&wgpu::InstanceDescriptor { backends, ..Default::default() });
         let surface = instance.create_surface(window.clone()).map_err(|e| ViewerError::Surface(e.to_string()))?;
@@ -156,7 +190,17 @@ impl Gfx {
         let (device, queue) =
             pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor { label: Some("vpl-viewer"), ..Default::default() }))
                 .map_err(|e| ViewerError::NoAdapter(e.to_string()))?;
-        let caps = surface.get_capabilities(&adapter);
+        Gfx::on(window, surface, &adapter, device, queue)
+    }
+
+    fn on(
+        window: Arc<Window>,
+        surface: wgpu::Surface<'static>,
+        adapter: &wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Gfx, ViewerError> {
+        let caps = surface.get_capabilities(adapter);
         let format = egui_wgpu::preferred_framebuffer_format(&caps.formats).map_err(|e| ViewerError::Surface(e.to_string()))?;
         let inner = window.inner_size();
         let config = wgpu::SurfaceConfiguration {
@@ -174,7 +218,17 @@ impl Gfx {
         let max_side = device.limits().max_texture_dimension_2d as usize;
         let egui = egui_winit::State::new(ctx, egui::ViewportId::ROOT, &window, Some(window.scale_factor() as f32), None, Some(max_side));
         let painter = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
-        Ok(Gfx { window, surface, device, queue, config, egui, painter })
+        Ok(Gfx {
+            window,
+            surface,
+            device,
+            queue,
+            config,
+            egui,
+            painter,
+            #[cfg(feature = "gpu")]
+            device_view: None,
+        })
     }
 
     fn resize(&mut self, w: u32, h: u32) {
@@ -307,6 +361,15 @@ impl History {
     }
 }
 
+/// A side's image and G-buffer on the host: its frame's, or read back from
+/// the device (on request: a click, a screenshot), `None` when the read
+/// failed.
+#[cfg(feature = "gpu")]
+fn host_frame(s: &SideResult) -> Option<(vpl_core::Image, vpl_core::GBuffer)> {
+    let (d, gpu) = (s.device.as_ref()?, s.gpu.as_ref()?);
+    Some((d.read_image(gpu.ctx()).ok()?, d.read_gbuffer(gpu.ctx()).ok()?))
+}
+
 fn side(s: &SideResult) -> SideFrame<'_> {
     SideFrame { image: &s.out.image, gbuffer: &s.out.gbuffer, vpls: &s.out.vpls, camera: &s.camera }
 }
@@ -355,6 +418,12 @@ struct State {
     composite: Option<Composite>,
     recompose: bool,
     texture: Option<egui::TextureHandle>,
+    /// What the view draws: `texture`'s id, or the device view's.
+    view_texture: Option<egui::TextureId>,
+    /// The window presents from the renderer's device: frames stay there.
+    resident: bool,
+    /// Frames composed on the device.
+    device_frames: u64,
     view_rect: Option<egui::Rect>,
     pixels_per_point: f32,
     history: [History; 2],
@@ -433,6 +502,9 @@ impl State {
             composite: None,
             recompose: false,
             texture: None,
+            view_texture: None,
+            resident: false,
+            device_frames: 0,
             view_rect: None,
             pixels_per_point: 1.0,
             history: [History::default(), History::default()],
@@ -465,7 +537,13 @@ impl State {
             (Some(a), Some(b)) if self.frames_shown > 1 && b > a => (self.frames_shown - 1) as f64 / (b - a).as_secs_f64(),
             _ => 0.0,
         };
-        Summary { frames: self.frames_shown, fps, renderer: self.renderer_line.clone(), resolution: self.resolution() }
+        Summary {
+            frames: self.frames_shown,
+            fps,
+            renderer: self.renderer_line.clone(),
+            resolution: self.resolution(),
+            device_frames: self.device_frames,
+        }
     }
 
     fn fail(&mut self, e: ViewerError) {
@@ -552,7 +630,7 @@ impl State {
             max_depth: vpl_core::Budget::default().max_depth,
             budget: REFERENCE_BUDGET,
         });
-        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone(), reference };
+        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone(), reference, resident: self.resident };
         if self.jobs.send(job).is_ok() {
             self.in_flight = Some((self.generation, cancel, Instant::now()));
         } else {
@@ -612,6 +690,51 @@ impl State {
         }
     }
 
+    /// The last frame's sides with their G-buffers on the host (read back
+    /// where they stayed on the device).
+    fn on_host(&self) -> Vec<(SideResult, vpl_core::GBuffer)> {
+        self.last
+            .iter()
+            .map(|s| {
+                #[cfg(feature = "gpu")]
+                if let Some((image, gbuffer)) = host_frame(s) {
+                    let out = vpl_render::FrameOutput { image, ..s.out.clone() };
+                    return (SideResult { out, device: None, gpu: None, ..s.clone() }, gbuffer);
+                }
+                (s.clone(), s.out.gbuffer.clone())
+            })
+            .collect()
+    }
+
+    /// How the view is drawn now.
+    fn look(&self) -> Look<'_> {
+        Look {
+            channel: self.channel,
+            overlay: self.overlay,
+            exposure: self.exposure,
+            reference: self.reference.as_ref().map(|r| &r.image),
+            picked: self.pick(),
+        }
+    }
+
+    /// Composes the last frame on the device it was rendered on, when the
+    /// window shares that device and every side stayed there.
+    #[cfg(feature = "gpu")]
+    fn compose_on_device(&mut self, gfx: &mut Gfx) {
+        let Some(view) = gfx.device_view.as_mut().filter(|_| self.recompose) else { return };
+        let look = self.look();
+        match view.show(&gfx.device, &mut gfx.painter, &self.last, &look) {
+            Ok(Some((id, c))) => {
+                self.view_texture = Some(id);
+                self.composite = Some(c);
+                self.recompose = false;
+                self.device_frames += 1;
+            }
+            Ok(None) => {}
+            Err(e) => self.error_line = Some(format!("view on the device: {e}")),
+        }
+    }
+
     fn compose(&mut self, ctx: &egui::Context) {
         if !self.recompose {
             return;
@@ -619,19 +742,13 @@ impl State {
         self.recompose = false;
         let Some(left) = self.last.first() else { return };
         let right = self.last.get(1).filter(|r| r.out.image.width == left.out.image.width && r.out.image.height == left.out.image.height);
-        let look = Look {
-            channel: self.channel,
-            overlay: self.overlay,
-            exposure: self.exposure,
-            reference: self.reference.as_ref().map(|r| &r.image),
-            picked: self.pick(),
-        };
-        let c = compose(side(left), right.map(side), &look);
+        let c = compose(side(left), right.map(side), &self.look());
         let image = egui::ColorImage::from_rgba_unmultiplied([c.width as usize, c.height as usize], &c.rgba);
         match &mut self.texture {
             Some(t) => t.set(image, egui::TextureOptions::NEAREST),
             None => self.texture = Some(ctx.load_texture("vpl-view", image, egui::TextureOptions::NEAREST)),
         }
+        self.view_texture = self.texture.as_ref().map(|t| t.id());
         self.composite = Some(c);
     }
 
@@ -745,7 +862,8 @@ impl State {
             Some(sx) if x >= sx as f32 && self.last.len() > 1 => 1,
             _ => 0,
         };
-        self.picked = self.last.get(k).and_then(|s| pick_vpl(side(s), x, y, radius)).map(|slot| (k, slot));
+        let hosted = self.on_host();
+        self.picked = hosted.get(k).and_then(|(s, g)| pick_vpl(SideFrame { gbuffer: g, ..side(s) }, x, y, radius)).map(|slot| (k, slot));
         self.status_line = Some(match self.picked {
             Some((k, slot)) => format!("picked VPL {slot} of {}", self.last[k].spec.sampler),
             None => "no VPL near the click".into(),
@@ -1173,14 +1291,9 @@ impl State {
             }
         }
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-        match &self.texture {
+        match self.view_texture {
             Some(t) => {
-                ui.painter().image(
-                    t.id(),
-                    rect,
-                    egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
-                    egui::Color32::WHITE,
-                );
+                ui.painter().image(t, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
             }
             None => {
                 ui.painter().text(
@@ -1261,8 +1374,18 @@ impl State {
         let png = with(".png");
         vpl_core::image::write_png_rgb8(&png, w, h, &rgb)?;
         let exr = with(".exr");
-        if let Some(c) = &self.composite {
-            c.hdr.write_exr(&exr)?;
+        match &self.composite {
+            Some(c) if c.hdr.on_host() => c.hdr.write_exr(&exr)?,
+            // Composed on the device: the values come from the frames read back.
+            Some(_) => {
+                let hosted = self.on_host();
+                if let Some((left, lg)) = hosted.first() {
+                    let right = hosted.get(1).map(|(s, g)| SideFrame { gbuffer: g, ..side(s) });
+                    let c = compose(SideFrame { gbuffer: lg, ..side(left) }, right, &self.look());
+                    c.hdr.write_exr(&exr)?;
+                }
+            }
+            None => {}
         }
         let ppp = self.pixels_per_point;
         let view = self.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
@@ -1312,10 +1435,14 @@ impl App {
         let ctx = gfx.egui.egui_ctx().clone();
         st.pixels_per_point = ctx.pixels_per_point();
         st.tick(&ctx);
+        #[cfg(feature = "gpu")]
+        st.compose_on_device(gfx);
         let out = ctx.run(raw, |ctx| {
             st.compose(ctx);
             st.ui(ctx);
         });
+        #[cfg(feature = "gpu")]
+        st.compose_on_device(gfx);
         st.compose(&ctx);
         st.submit();
         gfx.egui.handle_platform_output(&gfx.window, out.platform_output);
@@ -1345,7 +1472,7 @@ impl App {
             }
         }
         // A screenshot once the view shows a frame of what the script set up.
-        if st.texture.is_some()
+        if st.view_texture.is_some()
             && !st.recompose
             && let Some(path) = st.pending_shot.take()
         {
@@ -1379,8 +1506,12 @@ impl ApplicationHandler<Wake> for App {
         if self.gfx.is_some() {
             return;
         }
-        match Gfx::new(el, self.st.window_size, &format!("vpl view: {}", self.st.scene_name)) {
+        match Gfx::new(el, self.st.window_size, &format!("vpl view: {}", self.st.scene_name), self.shared.as_ref()) {
             Ok(g) => {
+                #[cfg(feature = "gpu")]
+                {
+                    self.st.resident = g.device_view.is_some();
+                }
                 g.window.request_redraw();
                 self.gfx = Some(g);
             }

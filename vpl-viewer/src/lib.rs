@@ -15,6 +15,15 @@
 //! the pixels it shades; the camera-and-light path of a session is
 //! recorded as a scene file with an animation.
 //!
+//! On the GPU backend the window opens its surface on the renderer's
+//! device, and frames whose every stage runs there stay there: the view
+//! is composed by kernels from the device's images and G-buffer
+//! ([`present`]), with no read-back. A click reads the G-buffer back once
+//! (to test which VPLs the camera sees), a screenshot the frames, the
+//! reference's comparison the image; the frame-to-frame change is reduced
+//! on the device. [`Summary::device_frames`] counts the views composed
+//! there.
+//!
 //! `vpl view --scene office` is this crate's [`run`]; a program with its
 //! own samplers calls it with its registry:
 //!
@@ -62,6 +71,8 @@ pub mod camera;
 mod display;
 mod error;
 pub mod inspect;
+#[cfg(feature = "gpu")]
+pub mod present;
 pub mod record;
 pub mod script;
 pub mod view;
@@ -152,6 +163,10 @@ pub struct Summary {
     pub renderer: String,
     /// Render resolution at the end.
     pub resolution: (u32, u32),
+    /// Views composed on the renderer's device from frames that stayed
+    /// there (no read-back): the GPU backend with a window on the same
+    /// device, and frames whose every stage runs there (indirect light).
+    pub device_frames: u64,
 }
 
 /// Opens the viewer's window and runs until it is closed (or the script ends).

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, Image, Mode, Scene};
 use vpl_pathtrace::{PathTracer, RenderSettings};
-use vpl_render::{Backend, FrameOutput, RenderError, Renderer};
+use vpl_render::{Backend, FrameOutput, ReadBack, RenderError, Renderer};
 use vpl_sampling::Registry;
 
 /// What a side renders with: a change rebuilds its renderer (and restarts
@@ -46,6 +46,9 @@ pub struct Job {
     pub cancel: Arc<AtomicBool>,
     /// Accumulate the reference after the sides.
     pub reference: Option<ReferenceSpec>,
+    /// Leave GPU frames on the device (the window shows them from there,
+    /// on the same device) instead of reading them back.
+    pub resident: bool,
 }
 
 /// The reference a job asks for: the path tracer's estimate of what the
@@ -71,6 +74,7 @@ pub struct Reference {
 }
 
 /// One side's frame.
+#[derive(Clone)]
 pub struct SideResult {
     /// What it was rendered with.
     pub spec: SideSpec,
@@ -82,6 +86,14 @@ pub struct SideResult {
     pub change: Option<f64>,
     /// The side's frame number (its renderer's count).
     pub index: u64,
+    /// The frame left on the device, when the job asked for resident frames
+    /// and every stage of the frame ran there (`out.image` then holds no
+    /// pixels, unless the job's reference needed them on the host).
+    #[cfg(feature = "gpu")]
+    pub device: Option<vpl_gpu::DeviceFrame>,
+    /// The device `device` is on.
+    #[cfg(feature = "gpu")]
+    pub gpu: Option<vpl_gpu::Gpu>,
 }
 
 /// What the render thread answers.
@@ -111,13 +123,32 @@ pub enum BackendChoice {
 }
 
 impl BackendChoice {
-    fn make(&self) -> Box<dyn Backend> {
+    /// A backend for one side, and where its frames left on the device appear.
+    fn make(&self) -> (Box<dyn Backend>, Published) {
         match self {
-            BackendChoice::Cpu => Box::new(vpl_render::CpuBackend),
+            BackendChoice::Cpu => (Box::new(vpl_render::CpuBackend), Published::default()),
             #[cfg(feature = "gpu")]
-            BackendChoice::Gpu(gpu) => Box::new(vpl_gpu::GpuBackend::new(gpu.clone())),
+            BackendChoice::Gpu(gpu) => {
+                let backend = vpl_gpu::GpuBackend::new(gpu.clone());
+                let frames = backend.frames();
+                (Box::new(backend), Published { gpu: Some((gpu.clone(), frames)) })
+            }
         }
     }
+}
+
+/// Where a side's GPU backend publishes the frames it leaves on the device.
+#[derive(Default)]
+struct Published {
+    #[cfg(feature = "gpu")]
+    gpu: Option<(vpl_gpu::Gpu, vpl_gpu::Frames)>,
+}
+
+/// A side's previous frame, for the frame-to-frame change.
+enum Previous {
+    Host(Image),
+    #[cfg(feature = "gpu")]
+    Device(vpl_gpu::DeviceFrame),
 }
 
 /// The path tracer's running sum, and what it is a sum for.
@@ -139,7 +170,10 @@ struct Side {
     spec: SideSpec,
     renderer: Renderer,
     index: u64,
-    previous: Option<Image>,
+    previous: Option<Previous>,
+    // Read by the GPU path alone.
+    #[cfg_attr(not(feature = "gpu"), allow(dead_code))]
+    published: Published,
 }
 
 /// Runs jobs from `jobs` until the window hangs up; calls `wake` after each
@@ -223,6 +257,38 @@ fn accumulate(job: &Job, spec: &ReferenceSpec, acc: &mut Option<Accumulation>, s
     Ok(Reference { image, passes: a.passes })
 }
 
+/// The frame `side` just left on the device, with its device; `None` when
+/// the frame came back to the host.
+#[cfg(feature = "gpu")]
+fn frame_on_device(side: &Side, on_device: bool) -> Option<(vpl_gpu::Gpu, vpl_gpu::DeviceFrame)> {
+    let (gpu, frames) = side.published.gpu.as_ref().filter(|_| on_device)?;
+    frames.latest().map(|f| (gpu.clone(), f))
+}
+
+#[cfg(not(feature = "gpu"))]
+fn frame_on_device(_: &Side, _: bool) -> Option<std::convert::Infallible> {
+    None
+}
+
+/// The window composes a view on the device only when every side is
+/// there: a side that is (a sampler that reads the previous image, say,
+/// keeps its frame on the host) beside one that is not comes back.
+#[cfg(feature = "gpu")]
+fn bring_back_if_mixed(sides: &mut [SideResult]) -> Result<(), String> {
+    if sides.iter().all(|s| s.device.is_some()) || sides.iter().all(|s| s.device.is_none()) {
+        return Ok(());
+    }
+    for s in sides.iter_mut() {
+        let Some(d) = s.device.take() else { continue };
+        // The frames share the renderer's device; the read needs its context.
+        let gpu = s.gpu.take().ok_or("a frame on the device without its device")?;
+        let why = |e: vpl_gpu::GpuError| format!("{}: {e}", s.spec.sampler);
+        s.out.image = d.read_image(gpu.ctx()).map_err(why)?;
+        s.out.gbuffer = d.read_gbuffer(gpu.ctx()).map_err(why)?;
+    }
+    Ok(())
+}
+
 /// `Err(None)`: cancelled; `Err(Some(line))`: failed.
 fn render_job(
     job: &Job,
@@ -239,18 +305,20 @@ fn render_job(
         }
         let slot = &mut sides[k];
         if slot.as_ref().is_none_or(|s| s.spec != *spec) {
+            let (backend, published) = backend.make();
             let renderer = Renderer::builder(&job.scene)
                 .vpls(spec.vpls)
                 .sampler(spec.sampler.as_str())
                 .registry(registry)
                 .mode(spec.mode)
                 .seed(seed)
-                .boxed_backend(backend.make())
+                .boxed_backend(backend)
                 .build()
                 .map_err(|e| Some(format!("{}: {e}", spec.sampler)))?;
-            *slot = Some(Side { spec: spec.clone(), renderer, index: 0, previous: None });
+            *slot = Some(Side { spec: spec.clone(), renderer, index: 0, previous: None, published });
         }
         let side = slot.as_mut().expect("built above");
+        side.renderer.set_read_back(if job.resident { ReadBack::Nothing } else { ReadBack::All });
         let frame = side.renderer.render_cancellable(&job.scene, &job.camera, side.index, job.time, &job.cancel);
         let frame = match frame {
             Ok(f) => f,
@@ -261,10 +329,50 @@ fn render_job(
                 return Err(Some(format!("{}: {e}", spec.sampler)));
             }
         };
-        let change = side.previous.as_ref().and_then(|p| temporal_change(p, &frame.image));
-        side.previous = Some(frame.image.clone());
-        out.push(SideResult { spec: spec.clone(), out: frame, camera: job.camera.clone(), change, index: side.index });
+        let on_device = !frame.image.on_host();
+        let (change, previous, host_image) = match frame_on_device(side, on_device) {
+            #[cfg(feature = "gpu")]
+            Some((gpu, device)) => {
+                let change = match &side.previous {
+                    Some(Previous::Device(p)) => gpu.temporal_change(p, &device).map_err(|e| Some(format!("{}: {e}", spec.sampler)))?,
+                    _ => None,
+                };
+                // The reference is compared on the host: its frames come back.
+                let host = job.reference.and_then(|_| side.renderer.read_image());
+                (change, Previous::Device(device), host)
+            }
+            _ => {
+                let change = match &side.previous {
+                    Some(Previous::Host(p)) => temporal_change(p, &frame.image),
+                    _ => None,
+                };
+                (change, Previous::Host(frame.image.clone()), None)
+            }
+        };
+        let frame = match host_image {
+            Some(image) => FrameOutput { image, ..frame },
+            None => frame,
+        };
+        #[cfg(feature = "gpu")]
+        let (device, gpu) = match &previous {
+            Previous::Device(d) => (Some(d.clone()), side.published.gpu.as_ref().map(|g| g.0.clone())),
+            Previous::Host(_) => (None, None),
+        };
+        side.previous = Some(previous);
+        out.push(SideResult {
+            spec: spec.clone(),
+            out: frame,
+            camera: job.camera.clone(),
+            change,
+            index: side.index,
+            #[cfg(feature = "gpu")]
+            device,
+            #[cfg(feature = "gpu")]
+            gpu,
+        });
         side.index += 1;
     }
+    #[cfg(feature = "gpu")]
+    bring_back_if_mixed(&mut out).map_err(Some)?;
     Ok(out)
 }

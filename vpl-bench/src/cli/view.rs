@@ -98,8 +98,8 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
     if !quiet {
         eprintln!(
-            "vpl: view: {} frames shown, {:.2} frames/s after the first, render {}x{}; {}",
-            s.frames, s.fps, s.resolution.0, s.resolution.1, s.renderer
+            "vpl: view: {} frames shown, {:.2} frames/s after the first, {} of them composed on the device, render {}x{}; {}",
+            s.frames, s.fps, s.device_frames, s.resolution.0, s.resolution.1, s.renderer
         );
     }
     Ok(())

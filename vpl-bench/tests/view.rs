@@ -202,37 +202,47 @@ fn view_mean(p: &Png, view: [usize; 4], hole: Option<[usize; 4]>) -> f64 {
     sum / n.max(1) as f64
 }
 
-#[test]
-fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
-    picks_references_and_records(&[]);
+/// Counts in `vpl view`'s closing line: frames shown, and views composed
+/// on the device.
+fn counts(stderr: &str) -> (u64, u64) {
+    let before = |marker: &str| {
+        stderr
+            .split(marker)
+            .next()
+            .and_then(|head| head.rsplit(' ').next())
+            .and_then(|n| n.parse::<u64>().ok())
+            .unwrap_or_else(|| panic!("a count before `{marker}` in {stderr}"))
+    };
+    (before(" frames shown"), before(" of them composed on the device"))
 }
 
-/// The same session on frames that stay on the GPU (indirect light only):
-/// the window composes them on the renderer's device, and the pick, the
-/// reference and the difference read back only what they need. On the CPU
-/// (no adapter) it is the session above, unless VPL_REQUIRE_GPU=1.
+/// On the GPU the window opens on the renderer's device and every frame
+/// (all light paths) stays there: the view is composed on the device, and
+/// the pick, the reference and the difference read back only what they
+/// need. On the CPU (no adapter) nothing is composed on a device, and
+/// VPL_REQUIRE_GPU=1 makes that a failure.
 #[test]
-fn a_session_on_frames_left_on_the_device_composes_them_there() {
-    let Some(stderr) = picks_references_and_records(&["--mode", "indirect"]) else { return };
+fn a_session_picks_a_vpl_accumulates_a_reference_and_records_a_path() {
+    let Some(stderr) = picks_references_and_records(&[]) else { return };
+    let (shown, composed) = counts(&stderr);
     if !stderr.contains("renderer: GPU") {
         assert!(std::env::var("VPL_REQUIRE_GPU").is_err(), "VPL_REQUIRE_GPU=1 and the viewer ran on the CPU: {stderr}");
+        assert_eq!(composed, 0, "{stderr}");
         return;
     }
-    let composed = stderr
-        .split(" of them composed on the device")
-        .next()
-        .and_then(|head| head.rsplit(' ').next())
-        .and_then(|n| n.parse::<u64>().ok())
-        .unwrap_or_else(|| panic!("the count of views composed on the device in {stderr}"));
-    let shown = stderr
-        .split(" frames shown")
-        .next()
-        .and_then(|head| head.rsplit(' ').next())
-        .and_then(|n| n.parse::<u64>().ok())
-        .unwrap_or_else(|| panic!("the count of frames in {stderr}"));
-    // Every frame of the session composes on the device (some twice: a
-    // change of overlay or channel recomposes the frame shown).
+    // Every frame composes on the device (some twice: a change of overlay
+    // or channel recomposes the frame shown).
     assert!(composed >= shown, "{composed} views composed on the device for {shown} frames: {stderr}");
+}
+
+/// The same session on the CPU backend: the frames are on the host and the
+/// view is composed there.
+#[test]
+fn the_same_session_on_the_cpu_composes_on_the_host() {
+    let Some(stderr) = picks_references_and_records(&["--backend", "cpu"]) else { return };
+    assert!(stderr.contains("renderer: CPU"), "{stderr}");
+    let (shown, composed) = counts(&stderr);
+    assert!(shown > 0 && composed == 0, "{stderr}");
 }
 
 /// Runs the picking session with `extra` arguments and checks what it

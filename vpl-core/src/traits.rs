@@ -194,10 +194,16 @@ pub trait IndirectShader: Send {
     fn keep_on_device(&mut self, keep: bool) {
         let _ = keep;
     }
-    /// The image the last shade left on the device, read back; `None` when
-    /// it left none there.
+    /// The image the last shade left on the device, read back, with what
+    /// [`IndirectShader::finish_on_device`] added; `None` when it left none
+    /// there.
     fn read_image(&self) -> Option<Image> {
         None
+    }
+    /// The indirect light the last shade left on the device, read back:
+    /// [`IndirectShader::read_image`] before anything was added to it.
+    fn read_indirect(&self) -> Option<Image> {
+        self.read_image()
     }
     /// Whether [`IndirectShader::finish_on_device`] can add the light paths
     /// a frame keeps besides the VPLs' to an image left on the device, so

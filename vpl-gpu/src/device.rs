@@ -22,6 +22,8 @@ struct Inner {
     gbuffer_kernel: OnceLock<GpuGBufferRenderer>,
     filter_kernel: OnceLock<FilterKernel>,
     change_kernel: OnceLock<crate::frame::ChangeKernel>,
+    direct_kernel: OnceLock<crate::direct::DirectKernel>,
+    lights: Mutex<Option<Arc<crate::radiosity::LightBuffers>>>,
     resident: Mutex<Option<Resident>>,
     gbuffer_ms: Mutex<(f64, f64)>,
 }
@@ -74,6 +76,8 @@ impl Gpu {
             gbuffer_kernel: OnceLock::new(),
             filter_kernel: OnceLock::new(),
             change_kernel: OnceLock::new(),
+            direct_kernel: OnceLock::new(),
+            lights: Mutex::new(None),
             resident: Mutex::new(None),
             gbuffer_ms: Mutex::new((0.0, 0.0)),
         }))
@@ -101,6 +105,14 @@ impl Gpu {
 
     pub(crate) fn filter_kernel(&self) -> &FilterKernel {
         self.0.filter_kernel.get_or_init(|| FilterKernel::new(&self.0.ctx))
+    }
+
+    pub(crate) fn direct_kernel(&self) -> &crate::direct::DirectKernel {
+        self.0.direct_kernel.get_or_init(|| crate::direct::DirectKernel::new(&self.0.ctx))
+    }
+
+    pub(crate) fn light_cache(&self) -> &Mutex<Option<Arc<crate::radiosity::LightBuffers>>> {
+        &self.0.lights
     }
 
     pub(crate) fn change_kernel(&self) -> &crate::frame::ChangeKernel {

@@ -34,6 +34,11 @@ impl DeviceFrame {
         DeviceFrame { width, height, image, gbuffer }
     }
 
+    /// The same frame with another image.
+    pub(crate) fn with_image(&self, image: wgpu::Buffer) -> DeviceFrame {
+        DeviceFrame { image, ..self.clone() }
+    }
+
     /// The radiance, one `vec4<f32>` a pixel (w unused), row-major.
     pub fn image(&self) -> &wgpu::Buffer {
         &self.image

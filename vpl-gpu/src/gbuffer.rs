@@ -126,7 +126,10 @@ struct CameraParams {
     width: u32,
     height: u32,
     two_sided: u32,
-    pad: u32,
+    has_sky: u32,
+    sky_zenith: [f32; 4],
+    sky_horizon: [f32; 4],
+    sky_nadir: [f32; 4],
 }
 
 /// The G-buffer kernel: one camera ray through each pixel centre, the
@@ -160,6 +163,10 @@ impl GpuGBufferRenderer {
         let out = DeviceGBuffer::empty(ctx, w, h, c.dot(r).clamp(-1.0, 1.0).acos(), camera.origin)?;
         let (f, right, up, sx, sy) = camera.raster_basis();
         let focus = if camera.lens_radius > 0.0 { camera.focus_distance } else { 0.0 };
+        let sky = match scene.environment.map(|i| &scene.lights[i]) {
+            Some(vpl_core::Light::Environment { sky }) => Some(*sky),
+            _ => None,
+        };
         let params = CameraParams {
             origin: camera.origin.extend(0.0).into(),
             forward: f.extend(sx).into(),
@@ -168,7 +175,10 @@ impl GpuGBufferRenderer {
             width: w,
             height: h,
             two_sided: scene.two_sided as u32,
-            pad: 0,
+            has_sky: sky.is_some() as u32,
+            sky_zenith: sky.map_or(Vec3::ZERO, |s| s.zenith).extend(0.0).into(),
+            sky_horizon: sky.map_or(Vec3::ZERO, |s| s.horizon).extend(0.0).into(),
+            sky_nadir: sky.map_or(Vec3::ZERO, |s| s.nadir).extend(0.0).into(),
         };
         let b_params = uniform(ctx, "camera", &params);
         let group = bind(ctx, "gbuffer", &self.layout, &[&b_params, &out.pos, &out.normal, &out.ng, &out.albedo, &out.emitted]);

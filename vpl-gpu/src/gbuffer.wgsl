@@ -15,7 +15,12 @@ struct Camera {
     width: u32,
     height: u32,
     two_sided: u32,
-    pad: u32,
+    // 1 where the scene has an environment (the sky below), else 0.
+    has_sky: u32,
+    // The environment's radiance at the zenith, the horizon and the nadir.
+    sky_zenith: vec4<f32>,
+    sky_horizon: vec4<f32>,
+    sky_nadir: vec4<f32>,
 }
 
 @group(1) @binding(0) var<uniform> cam: Camera;
@@ -44,7 +49,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         g_normal[i] = vec4<f32>(0.0, 0.0, 1.0, NO_HIT);
         g_ng[i] = vec4<f32>(0.0, 0.0, 1.0, bitcast<f32>(NONE));
         g_albedo[i] = vec4<f32>(0.0);
-        g_emitted[i] = vec4<f32>(0.0);
+        // The environment seen along the ray (Sky::radiance), as the host's
+        // environment_at_misses fills it in.
+        var sky = vec3<f32>(0.0);
+        if (cam.has_sky != 0u) {
+            let y = clamp(d.y, -1.0, 1.0);
+            let hor = cam.sky_horizon.xyz;
+            if (y >= 0.0) {
+                sky = hor + (cam.sky_zenith.xyz - hor) * y;
+            } else {
+                sky = hor + (cam.sky_nadir.xyz - hor) * (-y);
+            }
+        }
+        g_emitted[i] = vec4<f32>(sky, 0.0);
         return;
     }
     let p = o + d * h.t;

@@ -88,8 +88,11 @@ pub struct GpuInterleavedShader {
     /// Whether the gather and the filter are submitted and waited for
     /// apart, so that [`GpuShadeTimings`] times each.
     profile: bool,
-    /// The last image left on the device: its size and buffer.
-    kept: Option<(u32, u32, wgpu::Buffer)>,
+    /// The last image left on the device, and the G-buffer it was shaded over.
+    kept: Option<DeviceFrame>,
+    /// The kept image with the frame's emission and direct light added
+    /// ([`IndirectShader::finish_on_device`]).
+    finished: Option<DeviceFrame>,
     /// Where images left on the device are published, with their G-buffer.
     publish: Option<Frames>,
 }
@@ -109,6 +112,7 @@ impl GpuInterleavedShader {
             keep: false,
             profile: false,
             kept: None,
+            finished: None,
             publish: None,
         }
     }
@@ -292,10 +296,11 @@ impl GpuInterleavedShader {
         self.device_timings =
             GpuShadeTimings { upload_ms: ms(t0, t_up), gather_ms: ms(t_up, t1), filter_ms: ms(t1, t2), read_ms: ms(t2, t3) };
         if self.keep {
+            let frame = DeviceFrame::new(gbuf.width, gbuf.height, b_out, g.clone());
             if let Some(f) = &self.publish {
-                f.publish(Some(DeviceFrame::new(gbuf.width, gbuf.height, b_out.clone(), g.clone())));
+                f.publish(Some(frame.clone()));
             }
-            self.kept = Some((gbuf.width, gbuf.height, b_out));
+            self.kept = Some(frame);
             return Ok(Image::on_device(gbuf.width, gbuf.height));
         }
         self.kept = None;
@@ -331,16 +336,40 @@ impl IndirectShader for GpuInterleavedShader {
     /// # Panics
     /// When the device fails.
     fn read_image(&self) -> Option<Image> {
-        let (w, h, b) = self.kept.as_ref()?;
-        let n = *w as usize * *h as usize;
-        let rgba = read_back(self.gpu.ctx(), b, n).unwrap_or_else(|e| panic!("GPU image read-back: {e}"));
-        Some(image_of(*w, *h, rgba))
+        let frame = self.finished.as_ref().or(self.kept.as_ref())?;
+        Some(frame.read_image(self.gpu.ctx()).unwrap_or_else(|e| panic!("GPU image read-back: {e}")))
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn read_indirect(&self) -> Option<Image> {
+        let frame = self.kept.as_ref()?;
+        Some(frame.read_image(self.gpu.ctx()).unwrap_or_else(|e| panic!("GPU image read-back: {e}")))
+    }
+
+    /// The emission and the direct light are added by
+    /// [`Gpu::finish_frame`] on the same device.
+    fn finishes_on_device(&self) -> bool {
+        true
+    }
+
+    /// # Panics
+    /// When the device fails.
+    fn finish_on_device(&mut self, scene: &vpl_core::Scene, emission: bool, direct: Option<(u32, u64)>) -> bool {
+        let Some(frame) = &self.kept else { return false };
+        let finished = self.gpu.finish_frame(scene, frame, emission, direct).unwrap_or_else(|e| panic!("GPU direct light: {e}"));
+        if let Some(f) = &self.publish {
+            f.publish(Some(finished.clone()));
+        }
+        self.finished = Some(finished);
+        true
     }
 
     /// # Panics
     /// When the device fails.
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
         self.kept = None;
+        self.finished = None;
         if let Some(f) = &self.publish {
             f.publish(None);
         }

@@ -91,6 +91,7 @@
 mod backend;
 mod context;
 mod device;
+mod direct;
 mod filter;
 mod frame;
 mod gbuffer;

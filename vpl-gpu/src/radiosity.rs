@@ -5,7 +5,7 @@ use crate::context::GpuError;
 use crate::device::Gpu;
 use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, scene_layout};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, OnceLock};
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::rng::stream_key;
 use vpl_core::{Light, Purpose, RadiosityEstimator, Scene, SurfacePoint};
@@ -13,7 +13,7 @@ use vpl_pathtrace::PathRadiosity;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
+pub(crate) struct Params {
     jobs: u32,
     paths: u32,
     max_k: u32,
@@ -27,6 +27,12 @@ struct Params {
     /// `row` of the `sum` dispatch.
     sum_row: u32,
     pad: [u32; 2],
+}
+
+/// The WGSL of the radiosity kernels and of what reads lights as they do
+/// (the direct light, `direct.wgsl`).
+pub(crate) fn radiosity_source() -> String {
+    format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}\n{}", include_str!("radiosity.wgsl"), include_str!("direct.wgsl"))
 }
 
 /// Vertices from which the CPU path tracer plays Russian roulette.
@@ -49,7 +55,6 @@ pub struct GpuRadiosity {
     /// Paths and bounces, shared with the CPU twin.
     pub config: PathRadiosity,
     kernel: OnceLock<Kernels>,
-    lights: Mutex<Option<LightBuffers>>,
 }
 
 struct Kernels {
@@ -58,13 +63,65 @@ struct Kernels {
     sum: wgpu::ComputePipeline,
 }
 
-/// The lights as uploaded, with the host rows they were made from.
-struct LightBuffers {
+/// A scene's lights as the kernels read them (`radiosity.wgsl`), with the
+/// host rows they were made from: uploaded once a device and kept until
+/// the lights change ([`Gpu::lights`]).
+pub(crate) struct LightBuffers {
     rows: (Vec<Vec4>, Vec<f32>, Vec<f32>, Vec<u32>),
-    lights: wgpu::Buffer,
-    cdf: wgpu::Buffer,
-    pmf: wgpu::Buffer,
-    tri_light: wgpu::Buffer,
+    pub(crate) lights: wgpu::Buffer,
+    pub(crate) cdf: wgpu::Buffer,
+    pub(crate) pmf: wgpu::Buffer,
+    pub(crate) tri_light: wgpu::Buffer,
+}
+
+impl LightBuffers {
+    /// Whether these are `scene`'s lights (compared in place: only an
+    /// upload copies the rows).
+    fn hold(&self, scene: &Scene, rows: &[Vec4]) -> bool {
+        let d = &scene.light_distribution;
+        self.rows.0 == rows && self.rows.1 == d.cdf() && self.rows.2 == d.pmfs() && self.rows.3 == scene.tri_light
+    }
+}
+
+impl Gpu {
+    /// The lights of `scene` on the device: the upload kept from an earlier
+    /// call while the lights are the same, else a new one.
+    pub(crate) fn lights(&self, scene: &Scene) -> Arc<LightBuffers> {
+        let ctx = self.ctx();
+        let rows = light_rows(scene);
+        let mut cached = self.light_cache().lock().expect("light buffers lock");
+        if let Some(c) = cached.as_ref().filter(|c| c.hold(scene, &rows)) {
+            return c.clone();
+        }
+        let (cdf, pmf) = (scene.light_distribution.cdf(), scene.light_distribution.pmfs());
+        let made = Arc::new(LightBuffers {
+            lights: storage_init(ctx, "lights", &rows),
+            cdf: storage_init(ctx, "light cdf", cdf),
+            pmf: storage_init(ctx, "light pmf", pmf),
+            tri_light: storage_init(ctx, "tri light", &scene.tri_light),
+            rows: (rows, cdf.to_vec(), pmf.to_vec(), scene.tri_light.clone()),
+        });
+        *cached = Some(made.clone());
+        made
+    }
+}
+
+/// The `Params` of `radiosity.wgsl` that its light functions read, for a
+/// scene (the path fields zero).
+pub(crate) fn light_params(scene: &Scene) -> Params {
+    Params {
+        jobs: 0,
+        paths: 0,
+        max_k: 0,
+        rr_depth: 0,
+        lights: scene.lights.len() as u32,
+        two_sided: scene.two_sided as u32,
+        eps: scene.epsilon(),
+        row: 0,
+        env: scene.environment.map_or(u32::MAX, |i| i as u32),
+        sum_row: 0,
+        pad: [0; 2],
+    }
 }
 
 /// The lights of `scene` as the kernel reads them: four rows a light.
@@ -92,7 +149,7 @@ fn light_rows(scene: &Scene) -> Vec<Vec4> {
 impl GpuRadiosity {
     /// An estimator on `gpu` with `config`'s paths and bounces.
     pub fn new(gpu: Gpu, config: PathRadiosity) -> GpuRadiosity {
-        GpuRadiosity { gpu, config, kernel: OnceLock::new(), lights: Mutex::new(None) }
+        GpuRadiosity { gpu, config, kernel: OnceLock::new() }
     }
 
     /// L(y) of every (point, seed) pair.
@@ -106,7 +163,7 @@ impl GpuRadiosity {
         let k = self.kernel.get_or_init(|| {
             let (r, w) = (Binding::Read, Binding::ReadWrite);
             let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
-            let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}", include_str!("radiosity.wgsl"));
+            let source = radiosity_source();
             let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
             let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
             Kernels { layout, paths, sum }
@@ -120,21 +177,7 @@ impl GpuRadiosity {
                 [key as u32, (key >> 32) as u32]
             })
             .collect();
-        let mut cached = self.lights.lock().expect("light buffers lock");
-        let lights = light_rows(scene);
-        let (cdf, pmf) = (scene.light_distribution.cdf(), scene.light_distribution.pmfs());
-        // Compared in place: only an upload copies the rows.
-        let held = cached.as_ref().is_some_and(|c| c.rows.0 == lights && c.rows.1 == cdf && c.rows.2 == pmf && c.rows.3 == scene.tri_light);
-        if !held {
-            *cached = Some(LightBuffers {
-                lights: storage_init(ctx, "lights", &lights),
-                cdf: storage_init(ctx, "light cdf", cdf),
-                pmf: storage_init(ctx, "light pmf", pmf),
-                tri_light: storage_init(ctx, "tri light", &scene.tri_light),
-                rows: (lights, cdf.to_vec(), pmf.to_vec(), scene.tri_light.clone()),
-            });
-        }
-        let lb = cached.as_ref().expect("light buffers just made");
+        let lb = self.gpu.lights(scene);
         let n = points.len() as u64 * paths as u64;
         let groups = groups_1d(ctx, n, 64);
         let sum_groups = groups_1d(ctx, points.len() as u64, 64);
@@ -143,13 +186,9 @@ impl GpuRadiosity {
             paths,
             max_k: 1 + self.config.max_bounces,
             rr_depth: RR_DEPTH,
-            lights: scene.lights.len() as u32,
-            two_sided: scene.two_sided as u32,
-            eps: scene.epsilon(),
             row: groups.0 * 64,
-            env: scene.environment.map_or(u32::MAX, |i| i as u32),
             sum_row: sum_groups.0 * 64,
-            pad: [0; 2],
+            ..light_params(scene)
         };
         let b_params = uniform(ctx, "radiosity params", &params);
         let b_jobs = storage_init(ctx, "radiosity jobs", &jobs);
@@ -158,7 +197,6 @@ impl GpuRadiosity {
         let b_sum = storage(ctx, "radiosity sums", points.len() as u64 * 16)?;
         let group =
             bind(ctx, "radiosity", &k.layout, &[&b_params, &b_jobs, &b_keys, &lb.lights, &lb.cdf, &lb.pmf, &lb.tri_light, &b_out, &b_sum]);
-        drop(cached);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, &k.paths, &[&gs.group, &group], groups);
         dispatch(&mut enc, &k.sum, &[&gs.group, &group], sum_groups);

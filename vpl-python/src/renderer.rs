@@ -315,8 +315,11 @@ impl PyRenderer {
     /// (height, width, 3), or None before a frame or in `direct` mode.
     fn indirect<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
         let state = self.state.try_lock().map_err(|_| vpl_err("the renderer is busy"))?;
-        // Left on the device only by an indirect frame, whose image is its indirect light.
-        Ok(state.last.as_ref().and_then(|l| l.out.indirect.as_ref()).and_then(|i| host_or_read(py, &state.renderer, i)))
+        Ok(state.last.as_ref().and_then(|l| l.out.indirect.as_ref()).and_then(|i| match i.on_host() {
+            true => Some(to_array(py, i)),
+            // Left on the device: its indirect light alone is read back.
+            false => state.renderer.read_indirect().map(|i| to_array(py, &i)),
+        }))
     }
 
     /// The sampler's name (a registry name, or the Python sampler's class).

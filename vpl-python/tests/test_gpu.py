@@ -39,13 +39,16 @@ def test_gpu_frames_match_the_cpu_frames():
         assert err <= 1e-6, (f, err)
 
 
-def test_gpu_frames_stay_on_the_device_until_asked():
-    """`frame(i, image=False)` leaves an indirect frame on the device and
-    returns None; `image()` and `indirect()` read it back on request, and it
-    is the image the same renderer returns when asked each frame, bit for
-    bit (the same kernels on the same inputs)."""
+@pytest.mark.parametrize("mode", ["indirect", "full"])
+def test_gpu_frames_stay_on_the_device_until_asked(mode):
+    """`frame(i, image=False)` leaves the frame on the device and returns
+    None; `image()` and `indirect()` read it back on request, and they are
+    the image and indirect light the same renderer returns when asked each
+    frame, bit for bit (the same kernels on the same inputs). A frame of
+    every light path stays there too: its emission and direct light are
+    added on the device."""
     office = vpl.Scene.load("office")
-    kw = dict(sampler="smc", vpls=256, size=(48, 27), mode="indirect", seed=5)
+    kw = dict(sampler="smc", vpls=256, size=(48, 27), mode=mode, seed=5)
     lazy = gpu_renderer(office, **kw)
     eager = gpu_renderer(office, **kw)
     for f in (0, 1):
@@ -54,4 +57,7 @@ def test_gpu_frames_stay_on_the_device_until_asked():
         got = lazy.image()
         assert got is not None and got.shape == (27, 48, 3)
         assert np.array_equal(got, want), f
-        assert np.array_equal(lazy.indirect(), want), f
+        assert np.array_equal(lazy.indirect(), eager.indirect()), f
+        if mode == "full":
+            # The direct light is there: the whole frame outshines its indirect part.
+            assert (got - lazy.indirect()).mean() > 0.01 * got.mean(), f

@@ -327,7 +327,10 @@ impl Renderer {
             && compensation.is_none()
             && !self.sampler.reads_previous_image()
             && shader.on_device(self.visibility.as_ref());
-        shader.keep_on_device(resident && self.read_back == ReadBack::Nothing);
+        // A frame finished on the device (emission, direct light) is kept
+        // there to be finished, and read back after under ReadBack::Image.
+        let keep = resident && (self.read_back == ReadBack::Nothing || self.mode != Mode::Indirect);
+        shader.keep_on_device(keep);
         let t0 = Instant::now();
         let gbuffer = match resident {
             true => self.backend.device_gbuffer(scene, camera)?,
@@ -338,7 +341,7 @@ impl Renderer {
             None => self.backend.gbuffer(scene, camera)?,
         };
         let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let out = render_frame_cancellable_on(
+        let mut out = render_frame_cancellable_on(
             gbuffer,
             ms,
             scene,
@@ -357,17 +360,29 @@ impl Renderer {
             return Err(RenderError::NonFinite { stage, count, frame: index });
         }
         self.last_on_device = !out.image.on_host();
+        if self.last_on_device && self.read_back == ReadBack::Image {
+            out.image = shader.read_image().unwrap_or(out.image);
+        }
         self.previous = out.indirect.clone().filter(|i| i.on_host());
         Ok(out)
     }
 
-    /// The last frame's image on the host: read back from the device when
-    /// the frame left it there ([`ReadBack::Nothing`]), else a copy of
+    /// The last frame's image on the host, every light path of its mode:
+    /// read back from the device when the frame was kept there
+    /// ([`ReadBack::Nothing`], or a frame finished there), else a copy of
     /// [`FrameOutput::image`]'s indirect light; `None` before the first
     /// frame. Under [`ReadBack::Nothing`] this is the one read a caller
     /// pays for, when it wants the pixels (to write a file).
     pub fn read_image(&self) -> Option<Image> {
         if self.last_on_device { self.shader.as_ref()?.read_image() } else { self.previous.clone() }
+    }
+
+    /// The last frame's indirect light alone on the host
+    /// ([`FrameOutput::indirect`]): read back from the device when the
+    /// frame was kept there, else a copy; `None` before the first frame and
+    /// for frames without one.
+    pub fn read_indirect(&self) -> Option<Image> {
+        if self.last_on_device { self.shader.as_ref()?.read_indirect() } else { self.previous.clone() }
     }
 
     /// What the next frames on a device bring to the host (see

@@ -26,8 +26,14 @@ fn frame(gpu: &Gpu, scene: &Scene, setup: &SceneSetup, read_back: ReadBack) -> (
         .backend(GpuBackend::new(gpu.clone()))
         .build()
         .unwrap();
+    let before = gpu.traffic();
     let out = r.render(scene, &camera, 0, 0.0).unwrap();
+    let t = gpu.traffic() - before;
     let on_device = !out.image.on_host();
+    if on_device {
+        // IR samples on the host: a frame finished on the device reads nothing back.
+        assert_eq!(t.bytes_down, 0, "{t}");
+    }
     (if on_device { r.read_image().unwrap() } else { out.image }, on_device)
 }
 

@@ -23,6 +23,7 @@ struct Inner {
     filter_kernel: OnceLock<FilterKernel>,
     change_kernel: OnceLock<crate::frame::ChangeKernel>,
     direct_kernel: OnceLock<crate::direct::DirectKernel>,
+    neighbour_kernels: OnceLock<crate::neighbours::Kernels>,
     lights: Mutex<Option<Arc<crate::radiosity::LightBuffers>>>,
     resident: Mutex<Option<Resident>>,
     gbuffer_ms: Mutex<(f64, f64)>,
@@ -77,6 +78,7 @@ impl Gpu {
             filter_kernel: OnceLock::new(),
             change_kernel: OnceLock::new(),
             direct_kernel: OnceLock::new(),
+            neighbour_kernels: OnceLock::new(),
             lights: Mutex::new(None),
             resident: Mutex::new(None),
             gbuffer_ms: Mutex::new((0.0, 0.0)),
@@ -109,6 +111,10 @@ impl Gpu {
 
     pub(crate) fn direct_kernel(&self) -> &crate::direct::DirectKernel {
         self.0.direct_kernel.get_or_init(|| crate::direct::DirectKernel::new(&self.0.ctx))
+    }
+
+    pub(crate) fn neighbour_kernels(&self) -> &crate::neighbours::Kernels {
+        self.0.neighbour_kernels.get_or_init(|| crate::neighbours::Kernels::new(&self.0.ctx))
     }
 
     pub(crate) fn light_cache(&self) -> &Mutex<Option<Arc<crate::radiosity::LightBuffers>>> {

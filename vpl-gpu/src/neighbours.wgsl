@@ -1,0 +1,243 @@
+// Nearest neighbours on the device over a uniform grid built by a counting
+// sort: each point's cell (count), an exclusive prefix sum of the counts
+// (scan_blocks, scan_sums, scan_add), the points' indices sorted by cell
+// (scatter); then each query searches rings of cells around its own until
+// no unsearched cell can hold a nearer point than its k-th (knn).
+
+struct Params {
+    // The grid's low corner (xyz) and cell size (w).
+    lo: vec4<f32>,
+    // Cells along x, y, z, and in all.
+    dims: vec4<u32>,
+    points: u32,
+    queries: u32,
+    k: u32,
+    // 1: the queries are the points, each not its own neighbour.
+    members: u32,
+    // `row` of 2D dispatches over points and over queries.
+    row: u32,
+    blocks: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> points: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> queries: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> cell_of: array<u32>;
+@group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> start: array<u32>;
+@group(0) @binding(6) var<storage, read_write> sorted: array<u32>;
+@group(0) @binding(7) var<storage, read_write> block_sums: array<u32>;
+// Per query: the k-th squared distance, the nearest point, its squared distance.
+@group(0) @binding(8) var<storage, read_write> answers: array<vec4<u32>>;
+
+const NONE: u32 = 0xffffffffu;
+const KMAX: u32 = 64u;
+const BLOCK: u32 = 1024u;
+const INF: f32 = 3.4028235e38;
+
+fn cell_coords(p: vec3<f32>) -> vec3<i32> {
+    let g = (p - params.lo.xyz) / params.lo.w;
+    let hi = vec3<i32>(params.dims.xyz) - vec3<i32>(1);
+    return clamp(vec3<i32>(floor(g)), vec3<i32>(0), hi);
+}
+
+fn cell_index(c: vec3<i32>) -> u32 {
+    return (u32(c.z) * params.dims.y + u32(c.y)) * params.dims.x + u32(c.x);
+}
+
+@compute @workgroup_size(64)
+fn count(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + id.y * params.row;
+    if (i >= params.points) { return; }
+    let c = cell_index(cell_coords(points[i].xyz));
+    cell_of[i] = c;
+    atomicAdd(&counts[c], 1u);
+}
+
+var<workgroup> scan_tmp: array<u32, 1024>;
+
+// Exclusive scan of BLOCK counts a workgroup (4 a thread), into `start`,
+// and each block's total into `block_sums`.
+@compute @workgroup_size(256)
+fn scan_blocks(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let base = wg.x * BLOCK;
+    let cells = params.dims.w;
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let e = base + li * 4u + j;
+        var v = 0u;
+        if (e < cells) { v = atomicLoad(&counts[e]); }
+        scan_tmp[li * 4u + j] = v;
+    }
+    workgroupBarrier();
+    // Hillis–Steele over the 1024 values, inclusive.
+    var off = 1u;
+    loop {
+        if (off >= BLOCK) { break; }
+        var add: array<u32, 4>;
+        for (var j = 0u; j < 4u; j = j + 1u) {
+            let e = li * 4u + j;
+            add[j] = 0u;
+            if (e >= off) { add[j] = scan_tmp[e - off]; }
+        }
+        workgroupBarrier();
+        for (var j = 0u; j < 4u; j = j + 1u) {
+            scan_tmp[li * 4u + j] = scan_tmp[li * 4u + j] + add[j];
+        }
+        workgroupBarrier();
+        off = off * 2u;
+    }
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let e = li * 4u + j;
+        var before = 0u;
+        if (e > 0u) { before = scan_tmp[e - 1u]; }
+        if (base + e < cells) { start[base + e] = before; }
+    }
+    if (li == 0u) { block_sums[wg.x] = scan_tmp[BLOCK - 1u]; }
+}
+
+// Exclusive scan of the block totals in place (at most BLOCK of them).
+@compute @workgroup_size(256)
+fn scan_sums(@builtin(local_invocation_index) li: u32) {
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let e = li * 4u + j;
+        var v = 0u;
+        if (e < params.blocks) { v = block_sums[e]; }
+        scan_tmp[e] = v;
+    }
+    workgroupBarrier();
+    var off = 1u;
+    loop {
+        if (off >= BLOCK) { break; }
+        var add: array<u32, 4>;
+        for (var j = 0u; j < 4u; j = j + 1u) {
+            let e = li * 4u + j;
+            add[j] = 0u;
+            if (e >= off) { add[j] = scan_tmp[e - off]; }
+        }
+        workgroupBarrier();
+        for (var j = 0u; j < 4u; j = j + 1u) {
+            scan_tmp[li * 4u + j] = scan_tmp[li * 4u + j] + add[j];
+        }
+        workgroupBarrier();
+        off = off * 2u;
+    }
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let e = li * 4u + j;
+        var before = 0u;
+        if (e > 0u) { before = scan_tmp[e - 1u]; }
+        if (e < params.blocks) { block_sums[e] = before; }
+    }
+}
+
+@compute @workgroup_size(256)
+fn scan_add(@builtin(global_invocation_id) id: vec3<u32>) {
+    let e = id.x + id.y * params.row;
+    if (e >= params.dims.w) { return; }
+    start[e] = start[e] + block_sums[e / BLOCK];
+}
+
+// Each point's index into its cell's range (in no particular order within
+// the cell: the queries break ties by index).
+@compute @workgroup_size(64)
+fn scatter(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + id.y * params.row;
+    if (i >= params.points) { return; }
+    let c = cell_of[i];
+    let slot = atomicSub(&counts[c], 1u) - 1u;
+    sorted[start[c] + slot] = i;
+}
+
+fn d2(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    let d = a - b;
+    // The order of the host's sums: (x² + y²) + z².
+    let xx = d.x * d.x;
+    let yy = d.y * d.y;
+    let zz = d.z * d.z;
+    return (xx + yy) + zz;
+}
+
+@compute @workgroup_size(64)
+fn knn(@builtin(global_invocation_id) id: vec3<u32>) {
+    let qi = id.x + id.y * params.row;
+    if (qi >= params.queries) { return; }
+    var q: vec3<f32>;
+    if (params.members != 0u) { q = points[qi].xyz; } else { q = queries[qi].xyz; }
+    let k = min(params.k, KMAX);
+    var best_d: array<f32, 64>;
+    var best_i: array<u32, 64>;
+    var found = 0u;
+    let c0 = cell_coords(q);
+    let dims = vec3<i32>(params.dims.xyz);
+    let h = params.lo.w;
+    let lo = params.lo.xyz;
+    var r = 0;
+    loop {
+        // The cells at Chebyshev distance r from c0.
+        for (var dz = -r; dz <= r; dz = dz + 1) {
+            let z = c0.z + dz;
+            if (z < 0 || z >= dims.z) { continue; }
+            for (var dy = -r; dy <= r; dy = dy + 1) {
+                let y = c0.y + dy;
+                if (y < 0 || y >= dims.y) { continue; }
+                var step = 1;
+                if (abs(dy) < r && abs(dz) < r) { step = max(2 * r, 1); }
+                for (var dx = -r; dx <= r; dx = dx + step) {
+                    let x = c0.x + dx;
+                    if (x < 0 || x >= dims.x) { continue; }
+                    let c = cell_index(vec3<i32>(x, y, z));
+                    var end = params.points;
+                    if (c + 1u < params.dims.w) { end = start[c + 1u]; }
+                    for (var s = start[c]; s < end; s = s + 1u) {
+                        let j = sorted[s];
+                        if (params.members != 0u && j == qi) { continue; }
+                        let dj = d2(q, points[j].xyz);
+                        // Insert (dj, j) into the k best, ordered by distance then index.
+                        if (found == k) {
+                            let wd = best_d[k - 1u];
+                            if (dj > wd || (dj == wd && j > best_i[k - 1u])) { continue; }
+                        } else {
+                            found = found + 1u;
+                        }
+                        var m = found - 1u;
+                        loop {
+                            if (m == 0u) { break; }
+                            let pd = best_d[m - 1u];
+                            if (pd < dj || (pd == dj && best_i[m - 1u] < j)) { break; }
+                            best_d[m] = pd;
+                            best_i[m] = best_i[m - 1u];
+                            m = m - 1u;
+                        }
+                        best_d[m] = dj;
+                        best_i[m] = j;
+                    }
+                }
+            }
+        }
+        // Nothing unsearched lies nearer than the searched block's faces
+        // that are not the grid's own.
+        var bound = INF;
+        var whole = true;
+        for (var a = 0; a < 3; a = a + 1) {
+            if (c0[a] - r > 0) {
+                whole = false;
+                bound = min(bound, q[a] - (lo[a] + f32(c0[a] - r) * h));
+            }
+            if (c0[a] + r < dims[a] - 1) {
+                whole = false;
+                bound = min(bound, (lo[a] + f32(c0[a] + r + 1) * h) - q[a]);
+            }
+        }
+        if (whole) { break; }
+        if (found == k && bound > 0.0 && best_d[k - 1u] <= bound * bound) { break; }
+        r = r + 1;
+    }
+    var out = vec4<u32>(bitcast<u32>(INF), NONE, bitcast<u32>(INF), found);
+    if (found == k && k > 0u) { out.x = bitcast<u32>(best_d[k - 1u]); }
+    if (found > 0u) {
+        out.y = best_i[0];
+        out.z = bitcast<u32>(best_d[0]);
+    }
+    answers[qi] = out;
+}

@@ -15,12 +15,26 @@ struct Params {
     tri_only: u32,
 }
 
+/// What the batches made on the device begin with: the rays, the `row` of
+/// their 2D dispatch, and the stream key they draw from.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CameraParams {
+struct BatchHead {
     count: u32,
     row: u32,
     key: [u32; 2],
+}
+
+impl BatchHead {
+    fn new(count: usize, groups: (u32, u32, u32), key: u64) -> BatchHead {
+        BatchHead { count: count as u32, row: groups.0 * WORKGROUP, key: [key as u32, (key >> 32) as u32] }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CameraParams {
+    head: BatchHead,
     tri_only: u32,
     pad: [u32; 3],
     origin: [f32; 4],
@@ -33,9 +47,7 @@ struct CameraParams {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct BounceParams {
-    count: u32,
-    row: u32,
-    key: [u32; 2],
+    head: BatchHead,
     eps: f32,
     pad: [u32; 3],
 }
@@ -175,9 +187,7 @@ impl GpuRayCaster {
         let (w, h) = camera.resolution;
         let tri_only = answer == Answer::Triangles;
         let params = CameraParams {
-            count: count as u32,
-            row: groups.0 * WORKGROUP,
-            key: [key as u32, (key >> 32) as u32],
+            head: BatchHead::new(count, groups, key),
             tri_only: tri_only as u32,
             pad: [0; 3],
             origin: camera.origin.extend(0.0).into(),
@@ -214,13 +224,7 @@ impl GpuRayCaster {
             return Ok(Vec::new());
         }
         let groups = groups_1d(ctx, origins.len() as u64, WORKGROUP);
-        let params = BounceParams {
-            count: origins.len() as u32,
-            row: groups.0 * WORKGROUP,
-            key: [key as u32, (key >> 32) as u32],
-            eps,
-            pad: [0; 3],
-        };
+        let params = BounceParams { head: BatchHead::new(origins.len(), groups, key), eps, pad: [0; 3] };
         let b_params = uniform(ctx, "bounce params", &params);
         let flat: Vec<[u32; 2]> = origins.iter().map(|&(i, j)| [i, j]).collect();
         let b_origins = storage_init(ctx, "bounce origins", &flat);

@@ -13,6 +13,9 @@
 //! | [`GpuInterleavedShader`]: 4×4 interleaved (or exhaustive) gathering, clamp, filter, albedo | `InterleavedShader`, `ExhaustiveShader` | `IndirectShader` |
 //! | [`GpuCrossBilateral`] | `vpl_shading::CrossBilateral` | `apply` |
 //! | [`GpuRadiosity`]: path-traced L(y), NEE + MIS, the CPU's PCG32 streams | `vpl_pathtrace::PathRadiosity` | `RadiosityEstimator` |
+//! | [`Gpu::finish_frame`]: emission (the sky at misses) and direct light, the CPU's light samples and streams | `vpl_shading::direct_light` and the frame's emission | `IndirectShader::finish_on_device` |
+//! | [`Gpu::neighbours`]: k nearest points over a grid built by a counting sort | `vpl_density::KnnDensity` | batch call |
+//! | [`Gpu::temporal_change`]: Σ\|ΔL\|/ΣL of two frames | the viewer's host sum | batch call |
 //!
 //! The stages of one frame share a [`Gpu`] (the device, the scene upload and
 //! the G-buffer left on the device). The kernels do the CPU twins'

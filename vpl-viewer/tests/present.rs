@@ -132,3 +132,44 @@ fn composing_reads_nothing_back_and_takes_one_submission() {
     let texture = view.texture().expect("a texture");
     assert_eq!((texture.width(), texture.height()), (64, 48));
 }
+
+/// The render thread keeps a split view's frames on the device only when
+/// both sides can stay there: beside RR, which reads the previous image on
+/// the host, SMC's frame comes back too (image and G-buffer), so the window
+/// composes both on the host.
+#[test]
+fn a_split_with_a_side_on_the_host_comes_back_whole() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::{Arc, mpsc};
+    use vpl_viewer::worker::{self, BackendChoice, Job, Reply, SideSpec};
+    let Some(gpu) = gpu() else { return };
+    let setup = SceneSetup::load("cornell").unwrap();
+    let camera = setup.camera.with_resolution((48, 36)).unwrap();
+    let (jobs, job_rx) = mpsc::channel();
+    let (reply_tx, replies) = mpsc::channel();
+    let registry = vpl_sampling::Registry::builtin();
+    let thread = std::thread::spawn(move || worker::run(job_rx, reply_tx, registry, BackendChoice::Gpu(gpu), 1, || {}));
+    let scene = Arc::new(setup.scene.clone());
+    for (pair, on_device) in [(["smc", "ir"], true), (["smc", "rr"], false)] {
+        let sides = pair.map(|s| SideSpec { sampler: s.into(), vpls: 32, mode: Mode::Full, resolution: (48, 36) }).to_vec();
+        let cancel = Arc::new(AtomicBool::new(false));
+        jobs.send(Job { scene: scene.clone(), camera: camera.clone(), time: 0.0, sides, cancel, reference: None, resident: true }).unwrap();
+        match replies.recv().unwrap() {
+            Reply::Frame { sides, .. } => {
+                for s in &sides {
+                    let what = format!("{} beside {}", s.spec.sampler, pair.join(" and "));
+                    assert_eq!(s.device.is_some(), on_device, "{what}");
+                    assert_eq!(s.out.image.on_host(), !on_device, "{what}");
+                    assert_eq!(s.out.gbuffer.on_host(), !on_device, "{what}");
+                    if !on_device {
+                        assert_eq!(s.out.image.data.len(), 48 * 36, "{what}");
+                    }
+                }
+            }
+            Reply::Failed(e) => panic!("{e}"),
+            Reply::Cancelled => panic!("cancelled"),
+        }
+    }
+    drop(jobs);
+    thread.join().unwrap();
+}

@@ -58,20 +58,9 @@ fn count(@builtin(global_invocation_id) id: vec3<u32>) {
 
 var<workgroup> scan_tmp: array<u32, 1024>;
 
-// Exclusive scan of BLOCK counts a workgroup (4 a thread), into `start`,
-// and each block's total into `block_sums`.
-@compute @workgroup_size(256)
-fn scan_blocks(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let base = wg.x * BLOCK;
-    let cells = params.dims.w;
-    for (var j = 0u; j < 4u; j = j + 1u) {
-        let e = base + li * 4u + j;
-        var v = 0u;
-        if (e < cells) { v = atomicLoad(&counts[e]); }
-        scan_tmp[li * 4u + j] = v;
-    }
-    workgroupBarrier();
-    // Hillis–Steele over the 1024 values, inclusive.
+// Inclusive scan of scan_tmp's BLOCK values (Hillis–Steele), 4 a thread
+// of the workgroup's 256; called in uniform control flow.
+fn scan_in_place(li: u32) {
     var off = 1u;
     loop {
         if (off >= BLOCK) { break; }
@@ -88,6 +77,22 @@ fn scan_blocks(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) 
         workgroupBarrier();
         off = off * 2u;
     }
+}
+
+// Exclusive scan of BLOCK counts a workgroup (4 a thread), into `start`,
+// and each block's total into `block_sums`.
+@compute @workgroup_size(256)
+fn scan_blocks(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let base = wg.x * BLOCK;
+    let cells = params.dims.w;
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let e = base + li * 4u + j;
+        var v = 0u;
+        if (e < cells) { v = atomicLoad(&counts[e]); }
+        scan_tmp[li * 4u + j] = v;
+    }
+    workgroupBarrier();
+    scan_in_place(li);
     for (var j = 0u; j < 4u; j = j + 1u) {
         let e = li * 4u + j;
         var before = 0u;
@@ -107,22 +112,7 @@ fn scan_sums(@builtin(local_invocation_index) li: u32) {
         scan_tmp[e] = v;
     }
     workgroupBarrier();
-    var off = 1u;
-    loop {
-        if (off >= BLOCK) { break; }
-        var add: array<u32, 4>;
-        for (var j = 0u; j < 4u; j = j + 1u) {
-            let e = li * 4u + j;
-            add[j] = 0u;
-            if (e >= off) { add[j] = scan_tmp[e - off]; }
-        }
-        workgroupBarrier();
-        for (var j = 0u; j < 4u; j = j + 1u) {
-            scan_tmp[li * 4u + j] = scan_tmp[li * 4u + j] + add[j];
-        }
-        workgroupBarrier();
-        off = off * 2u;
-    }
+    scan_in_place(li);
     for (var j = 0u; j < 4u; j = j + 1u) {
         let e = li * 4u + j;
         var before = 0u;

@@ -242,34 +242,21 @@ pub fn render_frame_cancellable_on(
                 note(&mut non_finite, "the frame's emission and direct light (not added on the device)", 1);
             }
         }
-        t.total_ms = ms(start) + gbuffer_ms;
-        return FrameOutput {
-            image,
-            gbuffer,
-            timings: t,
-            visibility,
-            moved,
-            stored,
-            vpls: vpl_set,
-            sampler_stats,
-            indirect,
-            non_finite,
-            cancelled,
-        };
-    }
-    if emission {
-        note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
-        for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
-            *o += g.emitted;
+    } else {
+        if emission {
+            note(&mut non_finite, "the G-buffer's emission", gbuffer.samples.iter().filter(|g| !g.emitted.is_finite()).count());
+            for (o, g) in image.data.iter_mut().zip(&gbuffer.samples) {
+                *o += g.emitted;
+            }
         }
-    }
-    if direct {
-        let t0 = Instant::now();
-        let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
-        t.direct_ms = ms(t0);
-        note(&mut non_finite, "direct light", count_non_finite(&d));
-        for (o, d) in image.data.iter_mut().zip(&d.data) {
-            *o += *d;
+        if direct {
+            let t0 = Instant::now();
+            let d = direct_light(scene, &gbuffer, s.direct_samples, s.seed);
+            t.direct_ms = ms(t0);
+            note(&mut non_finite, "direct light", count_non_finite(&d));
+            for (o, d) in image.data.iter_mut().zip(&d.data) {
+                *o += *d;
+            }
         }
     }
     t.total_ms = ms(start) + gbuffer_ms;

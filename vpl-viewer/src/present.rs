@@ -8,9 +8,8 @@
 //! Both sides of a split view are rendered from one camera over one scene,
 //! so their G-buffers are the same: the left side's serves both.
 
-use crate::view::{Channel, Look, Overlay, heat};
+use crate::view::{Channel, Look, Overlay, difference_scale, flux_colour, flux_median};
 use vpl_core::glam::Vec4;
-use vpl_core::image::luminance;
 use vpl_core::{Camera, VplSet};
 use vpl_gpu::kernel::{Binding, bind, dispatch, finish_read, layout, pipeline, storage, storage_init, uniform};
 use vpl_gpu::{DeviceFrame, Gpu, GpuError};
@@ -133,10 +132,7 @@ impl DeviceView {
         let split_x = right.map(|_| w / 2);
         let reference = look.reference.filter(|r| (r.width, r.height) == (w, h));
         let shows_reference = matches!(look.channel, Channel::Reference | Channel::Difference);
-        let ref_scale = reference.map_or(1.0, |r| {
-            let m = r.data.iter().map(|c| luminance(*c) as f64).sum::<f64>() / r.data.len().max(1) as f64;
-            (m as f32).max(1e-6)
-        });
+        let ref_scale = reference.map_or(1.0, difference_scale);
         // The overlay's VPLs, left side's then right side's, in slot order.
         let mut splats = Vec::new();
         let mut splats_left = 0;
@@ -248,12 +244,7 @@ impl DeviceView {
 /// The splats of `side`'s VPLs that fall in its image, in slot order, as
 /// [`crate::view::compose`] colours them (flux over the set's median).
 fn splats_of(side: DeviceSide, w: u32, h: u32) -> Vec<Splat> {
-    let mut lum: Vec<f32> = side.vpls.iter().map(|(_, v)| luminance(v.flux)).filter(|l| *l > 0.0).collect();
-    if lum.is_empty() {
-        return Vec::new();
-    }
-    lum.sort_by(f32::total_cmp);
-    let median = lum[lum.len() / 2].max(f32::MIN_POSITIVE);
+    let Some(median) = flux_median(side.vpls) else { return Vec::new() };
     side.vpls
         .iter()
         .filter_map(|(slot, v)| {
@@ -261,8 +252,7 @@ fn splats_of(side: DeviceSide, w: u32, h: u32) -> Vec<Splat> {
             if !(px >= 0.0 && py >= 0.0 && px < w as f32 && py < h as f32) {
                 return None;
             }
-            let t = ((luminance(v.flux) / median).max(1e-6).log10() + 2.0) / 4.0;
-            let c = heat(t);
+            let c = flux_colour(v.flux, median);
             let moved = side.vpls.moved(slot) as u32;
             let colour = c[0] as u32 | (c[1] as u32) << 8 | (c[2] as u32) << 16 | moved << 24;
             Some(Splat { px, py, dist: (v.y - side.camera.origin).length(), colour })

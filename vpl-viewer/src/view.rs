@@ -168,11 +168,7 @@ pub fn compose(left: SideFrame, right: Option<SideFrame>, look: &Look) -> Compos
     let Look { channel, overlay, exposure, picked, .. } = *look;
     let (w, h) = (left.image.width, left.image.height);
     let reference = look.reference.filter(|r| r.width == w && r.height == h);
-    // The difference's scale: the reference's mean luminance.
-    let ref_scale = reference.map_or(1.0, |r| {
-        let m = r.data.iter().map(|c| luminance(*c) as f64).sum::<f64>() / r.data.len().max(1) as f64;
-        (m as f32).max(1e-6)
-    });
+    let ref_scale = reference.map_or(1.0, difference_scale);
     let split_x = right.map(|_| w / 2);
     let far = |g: &GBuffer| g.samples.iter().map(|s| s.depth).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
     let far_l = far(left.gbuffer);
@@ -266,6 +262,29 @@ pub fn compose(left: SideFrame, right: Option<SideFrame>, look: &Look) -> Compos
     Composite { width: w, height: h, rgba, hdr, split_x }
 }
 
+/// The difference channel's scale: the reference's mean luminance.
+pub(crate) fn difference_scale(reference: &Image) -> f32 {
+    let m = reference.data.iter().map(|c| luminance(*c) as f64).sum::<f64>() / reference.data.len().max(1) as f64;
+    (m as f32).max(1e-6)
+}
+
+/// The median luminance of a set's lit VPLs' fluxes, which the overlay
+/// colours against; `None` when none is lit.
+pub(crate) fn flux_median(vpls: &VplSet) -> Option<f32> {
+    let mut lum: Vec<f32> = vpls.iter().map(|(_, v)| luminance(v.flux)).filter(|l| *l > 0.0).collect();
+    if lum.is_empty() {
+        return None;
+    }
+    lum.sort_by(f32::total_cmp);
+    Some(lum[lum.len() / 2].max(f32::MIN_POSITIVE))
+}
+
+/// The overlay's colour of a VPL of flux `flux`: log₁₀ of its luminance
+/// over the median, −2 … +2, onto the [`heat`] ramp.
+pub(crate) fn flux_colour(flux: Vec3, median: f32) -> [u8; 4] {
+    heat(((luminance(flux) / median).max(1e-6).log10() + 2.0) / 4.0)
+}
+
 /// A colour for `t` in [0, 1]: blue, cyan, green, yellow, red.
 pub fn heat(t: f32) -> [u8; 4] {
     let t = t.clamp(0.0, 1.0);
@@ -356,12 +375,7 @@ pub fn against_reference(image: &Image, reference: &Image) -> Option<(f64, f64)>
 
 /// Splats `side`'s visible VPLs into columns `x0..x1` of the view.
 fn splat_vpls(rgba: &mut [u8], w: u32, h: u32, side: SideFrame, x0: u32, x1: u32) {
-    let mut lum: Vec<f32> = side.vpls.iter().map(|(_, v)| luminance(v.flux)).filter(|l| *l > 0.0).collect();
-    if lum.is_empty() {
-        return;
-    }
-    lum.sort_by(f32::total_cmp);
-    let median = lum[lum.len() / 2].max(f32::MIN_POSITIVE);
+    let Some(median) = flux_median(side.vpls) else { return };
     let mut put = |x: i64, y: i64, c: [u8; 4]| {
         if x >= x0 as i64 && x < x1 as i64 && y >= 0 && y < h as i64 {
             let i = ((y as u32 * w + x as u32) * 4) as usize;
@@ -372,9 +386,7 @@ fn splat_vpls(rgba: &mut [u8], w: u32, h: u32, side: SideFrame, x0: u32, x1: u32
         // Hidden behind the surface the pixel sees: not splatted.
         let Some((px, py)) = seen(side, v.y) else { continue };
         let (x, y) = (px as u32, py as u32);
-        // log₁₀ of flux over the median, −2 … +2, onto the colour ramp.
-        let t = ((luminance(v.flux) / median).max(1e-6).log10() + 2.0) / 4.0;
-        let c = heat(t);
+        let c = flux_colour(v.flux, median);
         let (x, y) = (x as i64, y as i64);
         for dy in -1..=1 {
             for dx in -1..=1 {

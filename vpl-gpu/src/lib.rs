@@ -106,6 +106,7 @@ mod raycast;
 mod raytraced;
 mod scene;
 mod shadow_maps;
+mod smc;
 
 pub use backend::{GpuBackend, backend};
 pub use context::{GpuContext, GpuError, Traffic};
@@ -120,3 +121,4 @@ pub use raycast::{GpuRayCaster, GpuRays};
 pub use raytraced::GpuRayTraced;
 pub use scene::GpuScene;
 pub use shadow_maps::GpuShadowMaps;
+pub use smc::GpuSmcSampler;

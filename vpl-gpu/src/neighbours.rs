@@ -1,12 +1,15 @@
 //! Nearest neighbours on the device: twin of `vpl_density::KnnDensity`'s
 //! k-th-neighbour radii and nearest members, over a uniform grid built on
-//! the device by a counting sort (cell counts, an exclusive prefix sum, a
-//! scatter), the structure the rest of SMC's iteration needs on the device
-//! (its densities of eqs. 7 and 8, its hits' nearest neighbours of line 6).
+//! the device (the points' bounds by a reduction, then a counting sort: cell
+//! counts, an exclusive prefix sum, a scatter), the structure the rest of
+//! SMC's iteration needs on the device (its densities of eqs. 7 and 8, its
+//! hits' nearest neighbours of line 6). Nothing about the grid crosses to
+//! the host, so a kernel's own buffers (points some of which are absent)
+//! can be searched where they lie ([`NeighbourSearch`]).
 
 use crate::context::{GpuContext, GpuError};
 use crate::device::Gpu;
-use crate::kernel::{Binding, bind, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
+use crate::kernel::{Binding, dispatch, finish_read, groups_1d, layout, pipeline, storage, storage_init, uniform};
 use vpl_core::glam::{Vec3, Vec4};
 
 /// Most neighbours a query may ask for.
@@ -19,14 +22,12 @@ const BLOCK: u64 = 1024;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Params {
-    lo: [f32; 4],
-    dims: [u32; 4],
     points: u32,
     queries: u32,
     k: u32,
     members: u32,
     row: u32,
-    blocks: u32,
+    max_cells: u32,
     pad: [u32; 2],
 }
 
@@ -43,6 +44,7 @@ pub struct Neighbours {
 
 pub(crate) struct Kernels {
     layout: wgpu::BindGroupLayout,
+    bounds: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     scan_sums: wgpu::ComputePipeline,
@@ -54,10 +56,11 @@ pub(crate) struct Kernels {
 impl Kernels {
     pub(crate) fn new(ctx: &GpuContext) -> Kernels {
         let (r, w) = (Binding::Read, Binding::ReadWrite);
-        let layout = layout(ctx, "neighbours", &[Binding::Uniform, r, r, w, w, w, w, w, w]);
+        let layout = layout(ctx, "neighbours", &[Binding::Uniform, r, r, w, w, w, w, w, w, w]);
         let src = include_str!("neighbours.wgsl");
         let p = |entry: &str| pipeline(ctx, entry, src, entry, &[&layout]);
         Kernels {
+            bounds: p("bounds"),
             count: p("count"),
             scan_blocks: p("scan_blocks"),
             scan_sums: p("scan_sums"),
@@ -69,25 +72,130 @@ impl Kernels {
     }
 }
 
-/// The grid over `points`: its low corner, cell size and cells a side. The
-/// cells are about 2 a point along the longest side's cube root, so a ring
-/// or two around a query holds its few nearest points, and at most
-/// `BLOCK²` in all.
-fn grid(points: &[Vec3]) -> (Vec3, f32, [u32; 3]) {
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for p in points {
-        lo = lo.min(*p);
-        hi = hi.max(*p);
+/// A buffer range a search reads: rows of `vec4` (xyz a point, w 0 where
+/// none is).
+#[derive(Clone, Copy)]
+pub(crate) struct Rows<'a> {
+    pub buffer: &'a wgpu::Buffer,
+    /// First row (its byte offset must meet the adapter's storage-offset alignment).
+    pub first: u64,
+    pub count: u64,
+}
+
+impl<'a> Rows<'a> {
+    pub(crate) fn whole(buffer: &'a wgpu::Buffer, count: u64) -> Rows<'a> {
+        Rows { buffer, first: 0, count }
     }
-    let extent = (hi - lo).max(Vec3::splat(1e-6));
-    let per_side = (2.0 * (points.len() as f32).cbrt()).ceil().max(1.0);
-    let mut h = extent.max_element() / per_side;
-    loop {
-        let d = (extent / h).floor() + 1.0;
-        if (d.x * d.y * d.z) as u64 <= BLOCK * BLOCK {
-            return (lo, h, [d.x as u32, d.y as u32, d.z as u32]);
-        }
-        h *= 1.25;
+
+    fn binding(&self) -> wgpu::BindingResource<'a> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: self.buffer,
+            offset: self.first * 16,
+            size: wgpu::BufferSize::new(self.count.max(1) * 16),
+        })
+    }
+}
+
+/// The grid's working buffers for up to `points` points, reusable from
+/// search to search (the scatter leaves the cell counts at zero).
+pub(crate) struct NeighbourSearch {
+    points: u64,
+    max_cells: u64,
+    cell_of: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    start: wgpu::Buffer,
+    sorted: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    grid: wgpu::Buffer,
+}
+
+/// A search bound to its buffers, to record into an encoder.
+pub(crate) struct BoundSearch {
+    /// One bind group a dispatch shape (points, cells, queries): the
+    /// parameters differ in `row` alone.
+    groups: [wgpu::BindGroup; 3],
+    shapes: [(u32, u32, u32); 3],
+}
+
+impl NeighbourSearch {
+    /// Buffers for grids over at most `points` points: about 8 cells a
+    /// point, at most `BLOCK²`.
+    pub(crate) fn new(ctx: &GpuContext, points: u64) -> Result<NeighbourSearch, GpuError> {
+        let max_cells = (8 * points.max(8)).next_multiple_of(BLOCK).min(BLOCK * BLOCK);
+        Ok(NeighbourSearch {
+            points,
+            max_cells,
+            cell_of: storage(ctx, "cell of", points * 4)?,
+            counts: storage(ctx, "cell counts", max_cells * 4)?,
+            start: storage(ctx, "cell starts", max_cells * 4)?,
+            sorted: storage(ctx, "sorted points", points * 4)?,
+            sums: storage(ctx, "block sums", BLOCK * 4)?,
+            grid: storage(ctx, "grid", 64)?,
+        })
+    }
+
+    /// A search of `points` (at most the buffers' points) for the `k`
+    /// nearest of each of `queries` (each point itself, not its own
+    /// neighbour, when `None`), answers into `answers` (16 B a query).
+    pub(crate) fn bind(
+        &self,
+        ctx: &GpuContext,
+        kernels: &Kernels,
+        points: Rows,
+        queries: Option<Rows>,
+        k: u32,
+        answers: Rows,
+    ) -> BoundSearch {
+        debug_assert!(points.count <= self.points);
+        let n_queries = queries.map_or(points.count, |q| q.count);
+        let shapes = [groups_1d(ctx, points.count, 64), groups_1d(ctx, self.max_cells, 256), groups_1d(ctx, n_queries, 64)];
+        let rows = [shapes[0].0 * 64, shapes[1].0 * 256, shapes[2].0 * 64];
+        let group = |row: u32| {
+            let params = Params {
+                points: points.count as u32,
+                queries: n_queries as u32,
+                k,
+                members: queries.is_none() as u32,
+                row,
+                max_cells: self.max_cells as u32,
+                pad: [0; 2],
+            };
+            let p = uniform(ctx, "grid params", &params);
+            let resources = [
+                p.as_entire_binding(),
+                points.binding(),
+                queries.map_or_else(|| points.binding(), |q| q.binding()),
+                self.cell_of.as_entire_binding(),
+                self.counts.as_entire_binding(),
+                self.start.as_entire_binding(),
+                self.sorted.as_entire_binding(),
+                self.sums.as_entire_binding(),
+                answers.binding(),
+                self.grid.as_entire_binding(),
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> =
+                resources.into_iter().enumerate().map(|(i, resource)| wgpu::BindGroupEntry { binding: i as u32, resource }).collect();
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("neighbours"),
+                layout: &kernels.layout,
+                entries: &entries,
+            })
+        };
+        BoundSearch { groups: [group(rows[0]), group(rows[1]), group(rows[2])], shapes }
+    }
+
+    /// Records the grid's build and the queries: seven dispatches.
+    pub(crate) fn record(&self, enc: &mut wgpu::CommandEncoder, kernels: &Kernels, s: &BoundSearch) {
+        let [g_points, g_cells, g_queries] = &s.groups;
+        let [points, cells, queries] = s.shapes;
+        let blocks = (self.max_cells / BLOCK) as u32;
+        dispatch(enc, &kernels.bounds, &[g_points], (1, 1, 1));
+        dispatch(enc, &kernels.count, &[g_points], points);
+        dispatch(enc, &kernels.scan_blocks, &[g_cells], (blocks, 1, 1));
+        dispatch(enc, &kernels.scan_sums, &[g_cells], (1, 1, 1));
+        dispatch(enc, &kernels.scan_add, &[g_cells], cells);
+        dispatch(enc, &kernels.scatter, &[g_points], points);
+        dispatch(enc, &kernels.knn, &[g_queries], queries);
     }
 }
 
@@ -113,51 +221,22 @@ impl Gpu {
             return Ok(vec![Neighbours { kth_sq: f32::INFINITY, nearest: None }; n_queries]);
         }
         let ctx = self.ctx();
-        let k_ = self.neighbour_kernels();
-        let (lo, h, dims) = grid(points);
-        let cells = dims[0] as u64 * dims[1] as u64 * dims[2] as u64;
-        let blocks = cells.div_ceil(BLOCK);
-        let point_groups = groups_1d(ctx, points.len() as u64, 64);
-        let query_groups = groups_1d(ctx, n_queries as u64, 64);
-        let cell_groups = groups_1d(ctx, cells, 256);
-        let params = |row: u32| Params {
-            lo: [lo.x, lo.y, lo.z, h],
-            dims: [dims[0], dims[1], dims[2], cells as u32],
-            points: points.len() as u32,
-            queries: n_queries as u32,
-            k: k as u32,
-            members: queries.is_none() as u32,
-            row,
-            blocks: blocks as u32,
-            pad: [0; 2],
-        };
-        let rows: Vec<Vec4> = points.iter().map(|p| p.extend(0.0)).collect();
-        let b_points = storage_init(ctx, "neighbour points", &rows);
-        let b_queries = match queries {
-            Some(q) => storage_init(ctx, "neighbour queries", &q.iter().map(|p| p.extend(0.0)).collect::<Vec<Vec4>>()),
-            None => storage(ctx, "no queries", 16)?,
-        };
-        let b_cell_of = storage(ctx, "cell of", points.len() as u64 * 4)?;
-        let b_counts = storage(ctx, "cell counts", cells * 4)?;
-        let b_start = storage(ctx, "cell starts", cells * 4)?;
-        let b_sorted = storage(ctx, "sorted points", points.len() as u64 * 4)?;
-        let b_sums = storage(ctx, "block sums", BLOCK * 4)?;
+        let kernels = self.neighbour_kernels();
+        let rows = |p: &[Vec3]| -> Vec<Vec4> { p.iter().map(|p| p.extend(1.0)).collect() };
+        let b_points = storage_init(ctx, "neighbour points", &rows(points));
+        let b_queries = queries.map(|q| storage_init(ctx, "neighbour queries", &rows(q)));
         let b_answers = storage(ctx, "neighbours", n_queries as u64 * 16)?;
-        // One bind group a dispatch shape: the parameters differ in `row` alone.
-        let group = |label: &str, row: u32| {
-            let p = uniform(ctx, "grid params", &params(row));
-            bind(ctx, label, &k_.layout, &[&p, &b_points, &b_queries, &b_cell_of, &b_counts, &b_start, &b_sorted, &b_sums, &b_answers])
-        };
-        let g_points = group("grid points", point_groups.0 * 64);
-        let g_cells = group("grid cells", cell_groups.0 * 256);
-        let g_queries = group("grid queries", query_groups.0 * 64);
+        let search = NeighbourSearch::new(ctx, points.len() as u64)?;
+        let bound = search.bind(
+            ctx,
+            kernels,
+            Rows::whole(&b_points, points.len() as u64),
+            b_queries.as_ref().map(|b| Rows::whole(b, n_queries as u64)),
+            k as u32,
+            Rows::whole(&b_answers, n_queries as u64),
+        );
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        dispatch(&mut enc, &k_.count, &[&g_points], point_groups);
-        dispatch(&mut enc, &k_.scan_blocks, &[&g_cells], (blocks as u32, 1, 1));
-        dispatch(&mut enc, &k_.scan_sums, &[&g_cells], (1, 1, 1));
-        dispatch(&mut enc, &k_.scan_add, &[&g_cells], cell_groups);
-        dispatch(&mut enc, &k_.scatter, &[&g_points], point_groups);
-        dispatch(&mut enc, &k_.knn, &[&g_queries], query_groups);
+        search.record(&mut enc, kernels, &bound);
         let answers: Vec<[u32; 4]> = finish_read(ctx, enc, &b_answers, n_queries)?;
         Ok(answers
             .into_iter()

@@ -57,10 +57,47 @@ pub struct GpuRadiosity {
     kernel: OnceLock<Kernels>,
 }
 
-struct Kernels {
-    layout: wgpu::BindGroupLayout,
-    paths: wgpu::ComputePipeline,
-    sum: wgpu::ComputePipeline,
+/// The path kernel (one invocation a point and path) and the sum (one a
+/// point), over the radiosity layout: the parameters, the jobs, their
+/// stream keys, the lights (three buffers), the light of each triangle,
+/// each path's light and each point's sum.
+pub(crate) struct Kernels {
+    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) paths: wgpu::ComputePipeline,
+    pub(crate) sum: wgpu::ComputePipeline,
+}
+
+impl Kernels {
+    pub(crate) fn new(ctx: &crate::GpuContext) -> Kernels {
+        let (r, w) = (Binding::Read, Binding::ReadWrite);
+        let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
+        let source = radiosity_source();
+        let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
+        let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
+        Kernels { layout, paths, sum }
+    }
+}
+
+/// The parameters of a batch of `jobs` points, `config`'s paths each, and
+/// the dispatch shapes of its path and sum kernels.
+pub(crate) fn path_params(
+    ctx: &crate::GpuContext,
+    scene: &Scene,
+    config: PathRadiosity,
+    jobs: usize,
+) -> (Params, (u32, u32, u32), (u32, u32, u32)) {
+    let groups = groups_1d(ctx, jobs as u64 * config.paths as u64, 64);
+    let sum_groups = groups_1d(ctx, jobs as u64, 64);
+    let params = Params {
+        jobs: jobs as u32,
+        paths: config.paths,
+        max_k: 1 + config.max_bounces,
+        rr_depth: RR_DEPTH,
+        row: groups.0 * 64,
+        sum_row: sum_groups.0 * 64,
+        ..light_params(scene)
+    };
+    (params, groups, sum_groups)
 }
 
 /// A scene's lights as the kernels read them (`radiosity.wgsl`), with the
@@ -160,14 +197,7 @@ impl GpuRadiosity {
         }
         let ctx = self.gpu.ctx();
         let gs = self.gpu.scene(scene)?;
-        let k = self.kernel.get_or_init(|| {
-            let (r, w) = (Binding::Read, Binding::ReadWrite);
-            let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
-            let source = radiosity_source();
-            let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
-            let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
-            Kernels { layout, paths, sum }
-        });
+        let k = self.kernel.get_or_init(|| Kernels::new(ctx));
         let jobs: Vec<Vec4> =
             points.iter().flat_map(|(y, _)| [y.p.extend(f32::from_bits(y.material)), y.n.extend(0.0), y.ng.extend(0.0)]).collect();
         let keys: Vec<[u32; 2]> = points
@@ -179,17 +209,7 @@ impl GpuRadiosity {
             .collect();
         let lb = self.gpu.lights(scene);
         let n = points.len() as u64 * paths as u64;
-        let groups = groups_1d(ctx, n, 64);
-        let sum_groups = groups_1d(ctx, points.len() as u64, 64);
-        let params = Params {
-            jobs: points.len() as u32,
-            paths,
-            max_k: 1 + self.config.max_bounces,
-            rr_depth: RR_DEPTH,
-            row: groups.0 * 64,
-            sum_row: sum_groups.0 * 64,
-            ..light_params(scene)
-        };
+        let (params, groups, sum_groups) = path_params(ctx, scene, self.config, points.len());
         let b_params = uniform(ctx, "radiosity params", &params);
         let b_jobs = storage_init(ctx, "radiosity jobs", &jobs);
         let b_keys = storage_init(ctx, "radiosity keys", &keys);

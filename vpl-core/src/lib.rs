@@ -117,7 +117,7 @@ pub use sandbox::LoadOptions;
 pub use scene::{Geometry, Scene, TriangleData};
 pub use scene_file::SceneFile;
 pub use sequence::Sequence;
-pub use services::{RadiosityFactory, Services, SharedEstimator};
+pub use services::{DeviceError, DeviceSamplers, RadiosityFactory, Services, SharedEstimator};
 pub use setup::SceneSetup;
 pub use stats::{Stat, Stats};
 pub use surface::{Hit, SurfacePoint};

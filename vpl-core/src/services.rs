@@ -3,7 +3,8 @@
 //! built (the registry passes them), so the sampler trait carries no setter
 //! that only one sampler needs.
 
-use crate::traits::{CpuRays, RadiosityEstimator, RayCaster};
+use crate::traits::{CpuRays, RadiosityEstimator, RayCaster, VplSampler};
+use std::any::Any;
 use std::sync::Arc;
 
 /// A radiosity estimator shared between threads.
@@ -25,6 +26,20 @@ where
     }
 }
 
+/// Samplers a backend runs wholly on its device: twins of host samplers,
+/// offered by the host sampler's name and its settings (the host sampler's
+/// own configuration type, e.g. `vpl_smc::SmcConfig`), so a registry entry
+/// asks before it builds the host one.
+pub trait DeviceSamplers: Send + Sync {
+    /// The device's twin of sampler `name` with `settings`; `None` when the
+    /// backend has none for them (the host sampler runs), an error when it
+    /// has one that failed to start.
+    fn twin(&self, name: &str, settings: &dyn Any) -> Option<Result<Box<dyn VplSampler>, DeviceError>>;
+}
+
+/// Why a device's sampler failed to start.
+pub type DeviceError = Box<dyn std::error::Error + Send + Sync>;
+
 /// The services of a backend.
 #[derive(Clone)]
 pub struct Services {
@@ -32,6 +47,8 @@ pub struct Services {
     pub rays: Arc<dyn RayCaster>,
     /// Radiosity estimators; `None`: each sampler uses its own CPU path tracer.
     pub radiosity: Option<Arc<dyn RadiosityFactory>>,
+    /// Samplers run wholly on the device; `None`: every sampler runs on the host.
+    pub samplers: Option<Arc<dyn DeviceSamplers>>,
 }
 
 impl Default for Services {
@@ -42,13 +59,17 @@ impl Default for Services {
 
 impl std::fmt::Debug for Services {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Services").field("rays", &self.rays.name()).field("radiosity", &self.radiosity.is_some()).finish()
+        f.debug_struct("Services")
+            .field("rays", &self.rays.name())
+            .field("radiosity", &self.radiosity.is_some())
+            .field("samplers", &self.samplers.is_some())
+            .finish()
     }
 }
 
 impl Services {
     /// The CPU's: the scene's BVH, and each sampler's own radiosity estimator.
     pub fn cpu() -> Services {
-        Services { rays: Arc::new(CpuRays), radiosity: None }
+        Services { rays: Arc::new(CpuRays), radiosity: None, samplers: None }
     }
 }

@@ -1,13 +1,19 @@
 //! The GPU as a [`vpl_render::Backend`]: the G-buffer, shadow maps or
 //! shadow rays, interleaved or exhaustive shading and the filter as wgpu
-//! kernels, and the rays and radiosity estimates of samplers that take them
-//! (SMC). The rest of sampling and the direct light stay on the CPU.
+//! kernels; SMC with the paper's kNN flux wholly on the device
+//! ([`GpuSmcSampler`], built in the registry's place), and the rays and
+//! radiosity estimates of the samplers that take them (SMC with the other
+//! fluxes). The rest of sampling stays on the CPU.
 
-use crate::{Frames, Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps};
+use crate::{Frames, Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps, GpuSmcSampler};
 use std::sync::Arc;
-use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, SharedEstimator, VplVisibility};
+use vpl_core::{
+    Budget, Camera, DeviceError, DeviceSamplers, GBuffer, GeometryClamp, IndirectShader, Scene, Services, SharedEstimator, VplSampler,
+    VplVisibility,
+};
 use vpl_pathtrace::PathRadiosity;
 use vpl_render::{Backend, RenderError, ShadingSpec, VisibilitySpec};
+use vpl_smc::{FluxEstimator, Placement, SmcConfig};
 
 /// The GPU backend on one device.
 #[derive(Clone)]
@@ -55,6 +61,23 @@ impl GpuBackend {
     }
 }
 
+/// The samplers this backend runs wholly on the device: SMC with the
+/// paper's kNN flux at the VPLs' sites ([`GpuSmcSampler`]). Other settings
+/// (the Voronoi flux, the centroid placement) run on the host with the
+/// device's rays and radiosities.
+struct DeviceTwins(Gpu);
+
+impl DeviceSamplers for DeviceTwins {
+    fn twin(&self, name: &str, settings: &dyn std::any::Any) -> Option<Result<Box<dyn VplSampler>, DeviceError>> {
+        let config = settings.downcast_ref::<SmcConfig>()?;
+        let runs = name.starts_with("smc")
+            && config.flux == FluxEstimator::Knn
+            && config.placement == Placement::Site
+            && config.k() <= crate::MAX_K;
+        runs.then(|| GpuSmcSampler::new(self.0.clone(), *config).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(DeviceError::from))
+    }
+}
+
 impl Backend for GpuBackend {
     fn name(&self) -> &str {
         "gpu"
@@ -69,7 +92,11 @@ impl Backend for GpuBackend {
         let make = move |paths: u32, max_bounces: u32| -> SharedEstimator {
             Box::new(GpuRadiosity::new(g.clone(), PathRadiosity { paths, max_bounces }))
         };
-        Services { rays: Arc::new(GpuRays::new(self.gpu.clone())), radiosity: Some(Arc::new(make)) }
+        Services {
+            rays: Arc::new(GpuRays::new(self.gpu.clone())),
+            radiosity: Some(Arc::new(make)),
+            samplers: Some(Arc::new(DeviceTwins(self.gpu.clone()))),
+        }
     }
 
     fn gbuffer(&self, scene: &Scene, camera: &Camera) -> Result<GBuffer, RenderError> {

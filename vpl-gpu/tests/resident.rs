@@ -189,3 +189,43 @@ fn frames_left_on_the_device_are_published_and_their_change_is_reduced_there() {
     r.render(&setup.scene, &camera, 3, 0.0).unwrap();
     assert!(frames.latest().is_none(), "a frame read back is not published");
 }
+
+/// SMC with the paper's flux, asked for by name on the GPU backend, runs
+/// wholly on the device ([`vpl_gpu::GpuSmcSampler`]): a steady 1080p frame
+/// with 2048 VPLs, its sampling included, reads back only the VPL rows and
+/// the statistics (48 B a slot and 64 B) and writes little more than the
+/// iteration's parameters, in one submission for the sampler's step.
+#[test]
+fn a_steady_1080p_frame_of_smc_on_the_device_moves_only_the_vpls() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("office").unwrap();
+    let camera = setup.camera.with_resolution((1920, 1080)).unwrap();
+    let backend = GpuBackend::new(gpu.clone());
+    let mut r = Renderer::builder(&setup.scene)
+        .vpls(2048)
+        .sampler("smc-knn")
+        .params(vpl_core::Params::parse(["warmup=4"]).unwrap())
+        .mode(Mode::Indirect)
+        .seed(7)
+        .read_back(ReadBack::Nothing)
+        .backend(backend)
+        .build()
+        .unwrap();
+    for f in 0..3 {
+        let before = gpu.traffic();
+        let out = r.render(&setup.scene, &camera, f, 0.0).unwrap();
+        let t = gpu.traffic() - before;
+        eprintln!("frame {f}: {t}; {} VPLs moved; {:?}", out.moved, out.timings);
+        assert_eq!(r.sampler().stats().get("stored"), Some(2048.0));
+        if f == 0 {
+            continue;
+        }
+        // The VPL rows and statistics are all that come back.
+        assert_eq!(t.bytes_down, 3 * 2048 * 16 + 64, "frame {f} read back {t}");
+        assert_eq!(t.reads, 1, "frame {f}: {t}");
+        assert!(t.bytes_up <= 512 << 10, "frame {f} moved {t}");
+        // One submission for the sampler's step, the rest the frame's.
+        assert!(t.submissions <= 9, "frame {f} took {t}");
+    }
+}

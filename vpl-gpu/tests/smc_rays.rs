@@ -69,7 +69,7 @@ fn smc_with_gpu_rays_takes_the_cpu_decisions() {
     let config = SmcConfig { vpls: 256, ..SmcConfig::default() };
     let mut cpu = SmcSampler::new(config).unwrap();
     let both = Arc::new(Both(GpuRays::new(gpu), Mutex::new([0; 4])));
-    let services = Services { rays: both.clone(), radiosity: None };
+    let services = Services { rays: both.clone(), radiosity: None, samplers: None };
     let mut on_gpu = SmcSampler::with_services(config, &services).unwrap();
     for f in [0u32, 15, 30, 45] {
         let (scene, camera) = setup.frame(f).unwrap();

@@ -79,6 +79,10 @@ fn smc_with(cx: &SamplerContext, p: &Params, name: &str, paper: bool) -> Result<
     cx.needs_vpls(name)?;
     cx.needs_indirect(name)?;
     let config = smc_settings(&cx.budget, p, paper).map_err(param(name))?;
+    // A backend that runs these settings wholly on its device does.
+    if let Some(twin) = cx.services.samplers.as_ref().and_then(|s| s.twin(name, &config)) {
+        return twin.map_err(|source| SamplingError::Sampler { name: name.into(), source });
+    }
     SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
 }
 

@@ -40,7 +40,8 @@ fn speculative_rounds_take_the_round_by_round_decisions() {
     let setup = SceneSetup::load("office").unwrap();
     let config = SmcConfig { vpls: 256, warmup: 8, ..SmcConfig::default() };
     let casters = [false, true].map(|speculates| std::sync::Arc::new(Counted { speculates, batches: Mutex::new(0) }));
-    let mut samplers = casters.clone().map(|c| SmcSampler::with_services(config, &Services { rays: c, radiosity: None }).unwrap());
+    let mut samplers =
+        casters.clone().map(|c| SmcSampler::with_services(config, &Services { rays: c, radiosity: None, samplers: None }).unwrap());
     let gbuffer = GBuffer::empty();
     let (mut re_verified, mut probe_rays) = (0, 0);
     for f in [0u32, 10, 20, 30, 40, 50] {

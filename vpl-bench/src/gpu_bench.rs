@@ -8,8 +8,57 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
 use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplSampler, VplVisibility};
-use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, Traffic};
-use vpl_sampling::{SmcConfig, SmcSampler};
+use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, GpuSmcSampler, Traffic};
+use vpl_sampling::{FluxEstimator, Placement, SmcConfig, SmcSampler};
+
+/// Where SMC's iteration runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SmcPlace {
+    /// The toolkit's default SMC (the Voronoi flux) on the host, its rays
+    /// and radiosity estimates on the device.
+    #[default]
+    Host,
+    /// SMC with the paper's kNN flux wholly on the device ([`GpuSmcSampler`]).
+    Device,
+}
+
+impl std::str::FromStr for SmcPlace {
+    type Err = String;
+    fn from_str(s: &str) -> Result<SmcPlace, String> {
+        match s {
+            "host" => Ok(SmcPlace::Host),
+            "device" => Ok(SmcPlace::Device),
+            _ => Err(format!("'{s}': host or device")),
+        }
+    }
+}
+
+enum Smc {
+    Host(Box<SmcSampler>),
+    Device(Box<GpuSmcSampler>),
+}
+
+impl Smc {
+    fn sampler(&mut self) -> &mut dyn VplSampler {
+        match self {
+            Smc::Host(s) => s.as_mut(),
+            Smc::Device(s) => s.as_mut(),
+        }
+    }
+
+    /// Rays, radiosity and kNN of the last step (the host sampler's own
+    /// timings; the device's steps share one submission).
+    fn steps(&self) -> [f64; 3] {
+        match self {
+            Smc::Host(s) => {
+                let t = s.timings();
+                [t.candidates_ms + t.visibility_ms, t.radiosity_ms, t.knn_ms]
+            }
+            Smc::Device(_) => [f64::NAN; 3],
+        }
+    }
+}
 
 /// Medians of one scene's timed frames, milliseconds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -58,6 +107,8 @@ pub struct GpuBenchRow {
     /// Whether the frame stayed on the device (G-buffer and image not read
     /// back), as a renderer under `ReadBack::Nothing` runs it.
     pub resident: bool,
+    /// Where SMC's iteration ran.
+    pub smc: SmcPlace,
     /// Host↔device traffic of a frame (medians of each count).
     pub traffic: Traffic,
     /// Of which: the SMC sampler's step.
@@ -76,6 +127,26 @@ fn median_traffic(t: &[Traffic]) -> Traffic {
     }
 }
 
+/// One scene's benchmark.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuBenchSpec<'a> {
+    /// Built-in scene or scene file.
+    pub scene: &'a str,
+    /// Image size.
+    pub size: (u32, u32),
+    /// VPL budget.
+    pub vpls: usize,
+    /// First frame of the scene's sequence.
+    pub start: u32,
+    /// Timed frames (after one untimed warm-up frame).
+    pub frames: u32,
+    /// Whether the frame stays on the device (the G-buffer and the image
+    /// not read back), as a renderer under `ReadBack::Nothing` runs it.
+    pub resident: bool,
+    /// Where SMC runs.
+    pub smc: SmcPlace,
+}
+
 /// Times `frames` frames (after one untimed warm-up frame, which compiles
 /// the kernels and renders every map) of `scene`'s sequence from frame
 /// `start` at `size` with `vpls` SMC VPLs, 128² maps, 4×4 interleaved
@@ -83,19 +154,18 @@ fn median_traffic(t: &[Traffic]) -> Traffic {
 /// the device, so the times add up. With `resident` the frame stays on the
 /// device (the G-buffer and the image are not read back); without, both are
 /// read back as a host-side renderer needs them.
-pub fn bench_scene(
-    gpu: &Gpu,
-    scene: &str,
-    size: (u32, u32),
-    vpls: usize,
-    start: u32,
-    frames: u32,
-    resident: bool,
-) -> Result<GpuBenchRow, BenchError> {
+pub fn bench_scene(gpu: &Gpu, spec: &GpuBenchSpec) -> Result<GpuBenchRow, BenchError> {
+    let GpuBenchSpec { scene, size, vpls, start, frames, resident, smc: place } = *spec;
     let setup = SceneSetup::load(scene)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
-    let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?;
+    let mut smc = match place {
+        SmcPlace::Host => Smc::Host(Box::new(SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?)),
+        SmcPlace::Device => {
+            let config = SmcConfig { vpls, flux: FluxEstimator::Knn, placement: Placement::Site, ..SmcConfig::default() };
+            Smc::Device(Box::new(GpuSmcSampler::new(gpu.clone(), config)?))
+        }
+    };
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
     let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     let mut shader = GpuInterleavedShader::new(gpu.clone(), Some(clamp), 0);
@@ -116,10 +186,10 @@ pub fn bench_scene(
         let frame = Frame { scene: &sc, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let t0 = Instant::now();
         let tr1 = gpu.traffic();
-        let set = smc.next_frame(&frame).clone();
+        let set = smc.sampler().next_frame(&frame).clone();
         let tr2 = gpu.traffic();
         let s_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let st = smc.timings();
+        let st = smc.steps();
         let t0 = Instant::now();
         let u = maps.update(&sc, &set);
         let m_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -143,9 +213,9 @@ pub fn bench_scene(
                 d.read_ms,
                 g_ms + m_ms + d.gather_ms + d.filter_ms,
                 total,
-                st.candidates_ms + st.visibility_ms,
-                st.radiosity_ms,
-                st.knn_ms,
+                st[0],
+                st[1],
+                st[2],
             ]);
         }
     }
@@ -172,6 +242,7 @@ pub fn bench_scene(
         kernels: col(9),
         frame: col(10),
         resident,
+        smc: place,
         traffic: median_traffic(&traffic.iter().map(|t| t.0).collect::<Vec<_>>()),
         sampling_traffic: median_traffic(&traffic.iter().map(|t| t.1).collect::<Vec<_>>()),
     })
@@ -187,13 +258,16 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
          filter. Each step is waited for, so the columns add up: *kernels* = G-buffer + shadow maps + gather + filter, *frame* = \
          everything including sampling, uploads and read-backs.\n"
     );
-    md.push_str("| scene | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
-    md.push_str("| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    md.push_str("*SMC*: `host` is the default SMC (Voronoi flux) on the host with its rays and radiosities on the device; `device` is SMC with the paper's kNN flux, every line of Algorithm 1 on the device.\n\n");
+    md.push_str("| scene | SMC | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
+    md.push_str("| --- | --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    let place = |p: SmcPlace| if p == SmcPlace::Host { "host" } else { "device" };
     for r in rows {
         let _ = writeln!(
             md,
-            "| `{}` | {} | {} | {}×{} | {:.2} | {:.2} | {:.2} | {:.2} ({:.0}) | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} ({}) |",
+            "| `{}` | {} | {} | {} | {}×{} | {:.2} | {:.2} | {:.2} | {:.2} ({:.0}) | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} ({}) |",
             r.scene,
+            place(r.smc),
             r.triangles,
             r.vpls,
             r.size.0,
@@ -214,17 +288,18 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
         );
     }
     md.push_str("\nSMC sampling by step (ms; rays and radiosity on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL, GPU) | kNN (CPU) | total |\n| --- | ---: | ---: | ---: | ---: |\n");
-    for r in rows {
+    for r in rows.iter().filter(|r| r.smc == SmcPlace::Host) {
         let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
     }
-    md.push_str("\nHost↔device traffic per frame (medians; the counts do not depend on the device's speed). *Resident*: the G-buffer and the image stay on the device; otherwise both are read back every frame:\n\n| scene | resident | up (KiB) | writes | down (KiB) | reads | submissions | of which SMC: up (KiB) | down (KiB) | submissions |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    md.push_str("\nHost↔device traffic per frame (medians; the counts do not depend on the device's speed). *Resident*: the G-buffer and the image stay on the device; otherwise both are read back every frame:\n\n| scene | SMC | resident | up (KiB) | writes | down (KiB) | reads | submissions | of which SMC: up (KiB) | down (KiB) | submissions |\n| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
     let kib = |b: u64| b as f64 / 1024.0;
     for r in rows {
         let (t, s) = (r.traffic, r.sampling_traffic);
         let _ = writeln!(
             md,
-            "| `{}` | {} | {:.1} | {} | {:.1} | {} | {} | {:.1} | {:.1} | {} |",
+            "| `{}` | {} | {} | {:.1} | {} | {:.1} | {} | {} | {:.1} | {:.1} | {} |",
             r.scene,
+            place(r.smc),
             if r.resident { "yes" } else { "no" },
             kib(t.bytes_up),
             t.writes,

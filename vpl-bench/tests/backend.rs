@@ -63,3 +63,36 @@ fn gpu_backend_renders_the_cpu_backends_frames() {
         }
     }
 }
+
+/// `vpl bench-gpu` measures SMC on the host and wholly on the device in one
+/// run, side by side; the device's step is one submission that reads back
+/// only the VPLs and the statistics.
+#[test]
+fn bench_gpu_measures_smc_on_the_host_and_on_the_device() {
+    let dir = std::env::temp_dir().join(format!("vpl-bench-gpu-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vpl"))
+        .args(["bench-gpu", "--scene", "cornell", "--size", "48x36", "--vpls", "64", "--frames", "2", "--smc", "host,device", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && !std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") && stderr.contains("adapter") {
+        eprintln!("skipped: {stderr}");
+        return;
+    }
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("gpu_bench.json")).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    let places: Vec<&str> = rows.iter().map(|r| r["smc"].as_str().unwrap()).collect();
+    assert_eq!(places, ["host", "device"]);
+    let device = &rows[1]["sampling_traffic"];
+    assert_eq!(device["submissions"], 1, "{device}");
+    assert_eq!(device["reads"], 1, "{device}");
+    assert_eq!(device["bytes_down"], 3 * 64 * 16 + 64, "{device}");
+    let host = &rows[0]["sampling_traffic"];
+    assert!(host["submissions"].as_u64().unwrap() > 1, "{host}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("| `cornell` | host |") && stdout.contains("| `cornell` | device |"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -133,6 +133,7 @@ impl Kernels {
 /// The sampler's state on the device, sized by its configuration.
 struct Buffers {
     it: wgpu::Buffer,
+    state: wgpu::Buffer,
     group: wgpu::BindGroup,
     out: wgpu::Buffer,
     rjobs: wgpu::Buffer,
@@ -218,7 +219,13 @@ impl GpuSmcSampler {
         let kernels = Kernels::new(ctx);
         let s = shape;
         let it = uniform(ctx, "smc iteration", &It::zeroed_default());
-        let state = storage(ctx, "smc state", 32 * 4)?;
+        // The counters, and the indirect dispatch sizes `decide` writes.
+        let state = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("smc state"),
+            size: 32 * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let u32s = storage(ctx, "smc words", (s.c + s.n * (s.tries + 2) + s.np2 + s.c) * 4)?;
         let pts = storage(ctx, "smc points", (6 * s.cs + s.ns) * 16)?;
         let f32s = storage(ctx, "smc floats", (s.c + s.n) * 4)?;
@@ -239,7 +246,7 @@ impl GpuSmcSampler {
         let hits = search.bind(ctx, nk, rows(&pts, 3 * s.cs, s.c), None, 1, rows(&answers, 0, s.c));
         let candidates = search.bind(ctx, nk, rows(&particles, 0, s.n), Some(rows(&pts, 6 * s.cs, s.n)), 1, rows(&answers, 0, s.n));
         let set = search.bind(ctx, nk, rows(&particles, 0, s.n), None, config.k() as u32, rows(&answers, 0, s.n));
-        let buffers = Buffers { it, group, out, rjobs, rkeys, rpaths, rsum, search, hits, candidates, set };
+        let buffers = Buffers { it, state, group, out, rjobs, rkeys, rpaths, rsum, search, hits, candidates, set };
         Ok(GpuSmcSampler {
             gpu,
             config,
@@ -366,8 +373,21 @@ impl GpuSmcSampler {
         // Line 18.
         let (jobs, radiance) = if relit { (&kn.relit_jobs, &kn.relit_radiance) } else { (&kn.added_jobs, &kn.added_radiance) };
         dispatch(&mut enc, jobs, &groups, g_n);
-        dispatch(&mut enc, &kn.radiosity.paths, &[&gs.group, &g_set], set_paths);
-        dispatch(&mut enc, &kn.radiosity.sum, &[&gs.group, &g_set], set_sums);
+        if relit || set_paths.1 > 1 {
+            dispatch(&mut enc, &kn.radiosity.paths, &[&gs.group, &g_set], set_paths);
+            dispatch(&mut enc, &kn.radiosity.sum, &[&gs.group, &g_set], set_sums);
+        } else {
+            // The new VPLs alone (at most M_max in a steady iteration), sized
+            // on the device by `decide`.
+            let mut pass =
+                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("smc new radiosity"), timestamp_writes: None });
+            pass.set_bind_group(0, &gs.group, &[]);
+            pass.set_bind_group(1, &g_set, &[]);
+            pass.set_pipeline(&kn.radiosity.paths);
+            pass.dispatch_workgroups_indirect(&b.state, 16 * 4);
+            pass.set_pipeline(&kn.radiosity.sum);
+            pass.dispatch_workgroups_indirect(&b.state, 20 * 4);
+        }
         dispatch(&mut enc, radiance, &groups, g_n);
         // Line 19 and the output.
         b.search.record(&mut enc, nk, &b.set);
@@ -461,6 +481,7 @@ impl VplSampler for GpuSmcSampler {
             .count("removed", s.removed)
             .count("weakest", s.weakest)
             .count("added", s.added)
+            .count("relit", s.relit as usize)
             .value("intensity_cv", s.intensity_cv as f64)
             .ms("ms", self.ms)
     }

@@ -85,6 +85,9 @@ const S_REMOVED: u32 = 11u;
 const S_ADDED: u32 = 12u;
 const S_STORED: u32 = 13u;
 const S_CV: u32 = 14u;
+// Indirect dispatch sizes of the new VPLs' radiosity: paths, then sums.
+const S_PATHS_GROUPS: u32 = 16u;
+const S_SUM_GROUPS: u32 = 20u;
 
 const PI: f32 = 3.14159265;
 
@@ -260,7 +263,7 @@ fn compact_x(@builtin(local_invocation_index) li: u32) {
     if (li == 0u) {
         atomicStore(&state[S_NX], total);
         // This iteration's counters.
-        for (var k = S_M; k < 32u; k = k + 1u) {
+        for (var k = S_M; k < 16u; k = k + 1u) {
             if (k != S_ID_LO && k != S_ID_HI) { atomicStore(&state[k], 0u); }
         }
     }
@@ -647,6 +650,13 @@ fn decide(@builtin(local_invocation_index) li: u32) {
         atomicStore(&state[S_WEAKEST], select(0u, remove - invalid, remove > invalid));
         atomicStore(&state[S_REMOVED], remove);
         atomicStore(&state[S_ADDED], added);
+        // The new VPLs' radiosity runs on them alone (64 invocations a group).
+        atomicStore(&state[S_PATHS_GROUPS], (added * it.paths + 63u) / 64u);
+        atomicStore(&state[S_PATHS_GROUPS + 1u], 1u);
+        atomicStore(&state[S_PATHS_GROUPS + 2u], 1u);
+        atomicStore(&state[S_SUM_GROUPS], (added + 63u) / 64u);
+        atomicStore(&state[S_SUM_GROUPS + 1u], 1u);
+        atomicStore(&state[S_SUM_GROUPS + 2u], 1u);
         atomicStore(&state[S_STORED], n_occ - remove + added);
         let next_id = id_of(m);
         atomicStore(&state[S_ID_LO], next_id.x);

@@ -38,38 +38,55 @@ fn mean_se(xs: &[f64]) -> (f64, f64) {
 struct Run {
     mean: f64,
     cv: f64,
+    relit: bool,
+    ray_valid: f64,
 }
 
-fn run(sampler: &mut dyn VplSampler, setup: &SceneSetup, gbuf: &GBuffer, seed: u64, frames: u64, m_max: usize) -> Run {
-    let camera = setup.camera.with_resolution((gbuf.width, gbuf.height)).unwrap();
+/// `frames` of `setup`'s sequence (the camera and the lights where they
+/// move) at `size`; the image mean of the last.
+fn run(sampler: &mut dyn VplSampler, setup: &SceneSetup, frames: &[u32], size: (u32, u32), seed: u64, m_max: usize) -> Run {
     let empty = GBuffer::empty();
-    let mut last = VplSet::new(0);
-    let mut cv = 0.0;
-    for i in 0..frames {
-        let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index: i, seed, gbuffer: &empty, previous: None };
+    let (mut last, mut cv, mut relit, mut ray_valid) = (VplSet::new(0), 0.0, false, 0.0);
+    let mut at = None;
+    for (i, &f) in frames.iter().enumerate() {
+        let (scene, camera) = setup.frame(f).unwrap();
+        let camera = camera.with_resolution(size).unwrap();
+        let frame = Frame { scene: &scene, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed, gbuffer: &empty, previous: None };
         last = sampler.next_frame(&frame).clone();
         if i > 0 {
             assert!(last.moved_count() <= m_max, "{} moved {} VPLs in a frame, over M_max = {m_max}", sampler.name(), last.moved_count());
         }
-        cv = sampler.stats().get("intensity_cv").expect("the intensities' CV");
+        let stats = sampler.stats();
+        cv = stats.get("intensity_cv").expect("the intensities' CV");
+        ray_valid += stats.get("ray_valid").unwrap_or(0.0);
+        relit |= stats.get("relit") == Some(1.0);
+        at = Some((scene, camera));
     }
     assert_eq!(last.stored(), last.len(), "every slot holds a VPL");
-    Run { mean: indirect_mean(&setup.scene, gbuf, &last), cv }
+    let (scene, camera) = at.expect("a frame");
+    let gbuf = render_gbuffer(&scene, &camera);
+    Run { mean: indirect_mean(&scene, &gbuf, &last), cv, relit, ray_valid }
 }
 
-fn twin(gpu: &Gpu, scene: &str, vpls: usize, seeds: u64) {
+/// Paired runs of the two samplers over `seeds`; `frames` of the scene's sequence.
+fn twin(gpu: &Gpu, scene: &str, vpls: usize, seeds: u64, frames: &[u32]) -> (f64, f64) {
     let setup = SceneSetup::load(scene).unwrap();
-    let camera = setup.camera.with_resolution((48, 36)).unwrap();
-    let gbuf = render_gbuffer(&setup.scene, &camera);
+    let size = (48, 36);
     let config = SmcConfig { vpls, m_max: vpls / 16, warmup: 20, flux: FluxEstimator::Knn, ..SmcConfig::default() };
     let (mut diffs, mut cpu_means, mut cv_diffs) = (Vec::new(), Vec::new(), Vec::new());
+    let mut ray_valid = 0.0;
     for seed in 1..=seeds {
-        let d = run(&mut GpuSmcSampler::new(gpu.clone(), config).unwrap(), &setup, &gbuf, seed, 3, config.m_max);
-        let c = run(&mut SmcSampler::new(config).unwrap(), &setup, &gbuf, seed, 3, config.m_max);
-        eprintln!("{scene} seed {seed}: image mean {:.5} device, {:.5} CPU; intensity CV {:.3}, {:.3}", d.mean, c.mean, d.cv, c.cv);
+        let d = run(&mut GpuSmcSampler::new(gpu.clone(), config).unwrap(), &setup, frames, size, seed, config.m_max);
+        let c = run(&mut SmcSampler::new(config).unwrap(), &setup, frames, size, seed, config.m_max);
+        eprintln!(
+            "{scene} seed {seed}: image mean {:.5} device, {:.5} CPU; intensity CV {:.3}, {:.3}; VPLs verified by rays {} and {}",
+            d.mean, c.mean, d.cv, c.cv, d.ray_valid, c.ray_valid
+        );
+        assert_eq!(d.relit, c.relit, "{scene}: both samplers see the lights change, or neither");
         diffs.push(d.mean - c.mean);
         cpu_means.push(c.mean);
         cv_diffs.push(d.cv - c.cv);
+        ray_valid += d.ray_valid;
     }
     let (dm, dse) = mean_se(&diffs);
     let (cm, _) = mean_se(&cpu_means);
@@ -78,6 +95,7 @@ fn twin(gpu: &Gpu, scene: &str, vpls: usize, seeds: u64) {
     assert!(dm.abs() <= 4.0 * dse + 1e-12, "{scene}: the image means differ by {dm:+.5}, over 4 standard errors ({dse:.5})");
     assert!(dm.abs() <= 0.01 * cm, "{scene}: the image means differ by {:+.2} %, over 1 %", 100.0 * dm / cm);
     assert!(cvm.abs() <= 4.0 * cvse + 1e-6, "{scene}: the intensities' CV differ by {cvm:+.4}, over 4 standard errors ({cvse:.4})");
+    (dm / cm, ray_valid)
 }
 
 #[test]
@@ -85,6 +103,31 @@ fn the_devices_smc_is_the_cpus_twin() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
     let seeds = std::env::var("SMC_TWIN_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(8);
-    twin(&gpu, "cornell", 256, seeds);
-    twin(&gpu, "office", 256, seeds);
+    // A still camera: three frames of the start.
+    twin(&gpu, "cornell", 256, seeds, &[0, 1, 2]);
+    twin(&gpu, "office", 256, seeds, &[0, 1, 2]);
+    // The camera and the light move: VPLs the camera no longer sees are
+    // verified by rays or replaced, and the set is relit every frame.
+    let (_, verified) = twin(&gpu, "atrium", 256, seeds, &[0, 40, 80, 120]);
+    assert!(verified > 0.0, "the moving camera made VPLs that rays had to verify");
+}
+
+/// The device's sampler reports the lights' change as the CPU's does.
+#[test]
+fn the_devices_smc_reports_relighting() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("atrium").unwrap();
+    let config = SmcConfig { vpls: 64, m_max: 4, warmup: 2, flux: FluxEstimator::Knn, ..SmcConfig::default() };
+    let mut dev = GpuSmcSampler::new(gpu, config).unwrap();
+    let empty = GBuffer::empty();
+    let mut relit = Vec::new();
+    for f in [0, 0, 60] {
+        let (scene, camera) = setup.frame(f).unwrap();
+        let camera = camera.with_resolution((32, 24)).unwrap();
+        let frame = Frame { scene: &scene, camera: &camera, time: 0.0, index: f as u64, seed: 1, gbuffer: &empty, previous: None };
+        dev.next_frame(&frame);
+        relit.push(dev.stats().relit);
+    }
+    assert_eq!(relit, [false, false, true]);
 }

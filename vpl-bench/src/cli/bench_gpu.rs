@@ -1,9 +1,9 @@
-//! `vpl bench-gpu`: Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
+//! `vpl bench-gpu`: Milliseconds per GPU kernel and per indirect frame (SMC on the host or wholly on the device), and the adapter:
 //! G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
 
 use super::*;
 
-/// Milliseconds per GPU kernel and per indirect frame (SMC sampling on the CPU), and the adapter:
+/// Milliseconds per GPU kernel and per indirect frame (SMC on the host or wholly on the device), and the adapter:
 /// G-buffer, shadow maps of moved VPLs, interleaved gathering, filter, uploads and read-backs.
 #[derive(clap::Args)]
 pub(super) struct Args {
@@ -29,29 +29,29 @@ pub(super) struct Args {
     /// renderer does (default: the frame stays on the device).
     #[arg(long)]
     read_back: bool,
+    /// Where SMC runs, one row each (comma-separated): `host` (the default
+    /// SMC, its rays and radiosities on the device) and `device` (the
+    /// paper's kNN flux, every line on the device).
+    #[arg(long, value_delimiter = ',', default_value = "host,device")]
+    smc: Vec<String>,
 }
 
 /// Runs `vpl bench-gpu`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
-    let Args { scenes, size: Size(w, h), vpls, frames, threads, out, read_back } = args;
-    bench_gpu(&scenes, (w, h), vpls, frames, threads, !read_back, out.as_deref())
+    bench_gpu(args)
 }
 
 /// `vpl bench-gpu`.
 #[cfg(feature = "gpu")]
-fn bench_gpu(
-    scenes: &[String],
-    size: (u32, u32),
-    vpls: usize,
-    frames: u32,
-    threads: Option<usize>,
-    resident: bool,
-    out: Option<&Path>,
-) -> Res<()> {
+fn bench_gpu(args: Args) -> Res<()> {
+    let Args { scenes, size: Size(w, h), vpls, frames, threads, out, read_back, smc } = args;
+    let (size, resident, out) = ((w, h), !read_back, out.as_deref());
     if frames == 0 || vpls == 0 {
         return Err("--frames and --vpls must be at least 1".into());
     }
-    for s in scenes {
+    let places: Vec<crate::gpu_bench::SmcPlace> =
+        smc.iter().map(|s| s.parse().map_err(|e| format!("--smc: {e}"))).collect::<Result<_, _>>()?;
+    for s in &scenes {
         SceneSetup::load(s).map_err(|e| format!("--scene: {e}"))?;
     }
     let pool = pool(threads)?;
@@ -59,10 +59,14 @@ fn bench_gpu(
     let adapter = gpu.ctx().describe();
     eprintln!("vpl: bench-gpu on {adapter}");
     let mut rows = Vec::new();
-    for s in scenes {
+    for s in &scenes {
         eprintln!("vpl: bench-gpu: {s} ({vpls} VPLs, {}x{}, {frames} frames)", size.0, size.1);
         let start = crate::table1::rows::row(s).map_or(0, |r| r.quick_frames.start);
-        rows.push(pool.install(|| crate::gpu_bench::bench_scene(&gpu, s, size, vpls, start, frames, resident)).map_err(|e| e.to_string())?);
+        for &place in &places {
+            let spec = crate::gpu_bench::GpuBenchSpec { scene: s, size, vpls, start, frames, resident, smc: place };
+            let row = pool.install(|| crate::gpu_bench::bench_scene(&gpu, &spec));
+            rows.push(row.map_err(|e| e.to_string())?);
+        }
     }
     let md = crate::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
     println!("{md}");
@@ -79,6 +83,6 @@ fn bench_gpu(
 
 /// `vpl bench-gpu` without the GPU backend.
 #[cfg(not(feature = "gpu"))]
-fn bench_gpu(_: &[String], _: (u32, u32), _: usize, _: u32, _: Option<usize>, _: bool, _: Option<&Path>) -> Res<()> {
+fn bench_gpu(_: Args) -> Res<()> {
     Err("bench-gpu: this build has no GPU backend (build vpl-bench with its default feature `gpu`)".into())
 }

@@ -745,6 +745,7 @@ impl VplSampler for SmcSampler {
             .count("removed", s.removed)
             .count("weakest", s.weakest)
             .count("added", s.added)
+            .count("relit", s.relit as usize)
             .value("intensity_cv", s.intensity_cv as f64)
             .value("knn_area_ratio", s.knn_area_ratio as f64)
             .value("candidate_light", s.candidate_light)

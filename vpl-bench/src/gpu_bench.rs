@@ -3,62 +3,15 @@
 //! radiosity estimates on the GPU.
 
 use crate::error::BenchError;
+pub use crate::smc_step::SmcPlace;
+use crate::smc_step::SmcStep;
 use crate::stages::median;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
-use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplSampler, VplVisibility};
-use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, GpuSmcSampler, Traffic};
-use vpl_sampling::{FluxEstimator, Placement, SmcConfig, SmcSampler};
-
-/// Where SMC's iteration runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SmcPlace {
-    /// The toolkit's default SMC (the Voronoi flux) on the host, its rays
-    /// and radiosity estimates on the device.
-    #[default]
-    Host,
-    /// SMC with the paper's kNN flux wholly on the device ([`GpuSmcSampler`]).
-    Device,
-}
-
-impl std::str::FromStr for SmcPlace {
-    type Err = String;
-    fn from_str(s: &str) -> Result<SmcPlace, String> {
-        match s {
-            "host" => Ok(SmcPlace::Host),
-            "device" => Ok(SmcPlace::Device),
-            _ => Err(format!("'{s}': host or device")),
-        }
-    }
-}
-
-enum Smc {
-    Host(Box<SmcSampler>),
-    Device(Box<GpuSmcSampler>),
-}
-
-impl Smc {
-    fn sampler(&mut self) -> &mut dyn VplSampler {
-        match self {
-            Smc::Host(s) => s.as_mut(),
-            Smc::Device(s) => s.as_mut(),
-        }
-    }
-
-    /// Rays, radiosity and kNN of the last step (the host sampler's own
-    /// timings; the device's steps share one submission).
-    fn steps(&self) -> [f64; 3] {
-        match self {
-            Smc::Host(s) => {
-                let t = s.timings();
-                [t.candidates_ms + t.visibility_ms, t.radiosity_ms, t.knn_ms]
-            }
-            Smc::Device(_) => [f64::NAN; 3],
-        }
-    }
-}
+use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplVisibility};
+use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, Traffic};
+use vpl_sampling::SmcConfig;
 
 /// Medians of one scene's timed frames, milliseconds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -78,11 +31,13 @@ pub struct GpuBenchRow {
     /// The SMC sampler's step (CPU, its rays on the GPU).
     pub sampling: f64,
     /// Of which: camera points, candidate rays and indirect visibility
-    /// (rays on the GPU, bookkeeping on the CPU).
+    /// (on the host: rays on the device, bookkeeping on the host).
     pub smc_rays: f64,
-    /// Of which: radiosity estimates (16 NEE paths per candidate and new VPL, GPU).
+    /// Of which: radiosity estimates (16 NEE paths per candidate and new
+    /// VPL, on the device either way).
     pub smc_radiosity: f64,
-    /// Of which: k-d trees and kNN densities (CPU).
+    /// Of which: kNN densities (and on the host the cells; on the device
+    /// the grids, their queries, the densities and fluxes).
     pub smc_knn: f64,
     /// Shadow maps of the moved VPLs (one dispatch).
     pub shadow_maps: f64,
@@ -159,12 +114,10 @@ pub fn bench_scene(gpu: &Gpu, spec: &GpuBenchSpec) -> Result<GpuBenchRow, BenchE
     let setup = SceneSetup::load(scene)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
+    let config = SmcConfig { vpls, ..SmcConfig::default() };
     let mut smc = match place {
-        SmcPlace::Host => Smc::Host(Box::new(SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &services)?)),
-        SmcPlace::Device => {
-            let config = SmcConfig { vpls, flux: FluxEstimator::Knn, placement: Placement::Site, ..SmcConfig::default() };
-            Smc::Device(Box::new(GpuSmcSampler::new(gpu.clone(), config)?))
-        }
+        SmcPlace::Host => SmcStep::host(config, &services)?,
+        SmcPlace::Device => SmcStep::device(gpu, config)?,
     };
     let mut maps = GpuShadowMaps::new(gpu.clone(), vpl_visibility::DEFAULT_RESOLUTION)?;
     let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
@@ -186,10 +139,10 @@ pub fn bench_scene(gpu: &Gpu, spec: &GpuBenchSpec) -> Result<GpuBenchRow, BenchE
         let frame = Frame { scene: &sc, camera: &camera, time: f as f32 / 30.0, index: f as u64, seed: 0, gbuffer: &gbuf, previous: None };
         let t0 = Instant::now();
         let tr1 = gpu.traffic();
-        let set = smc.sampler().next_frame(&frame).clone();
+        let set = smc.next_frame(&frame).clone();
         let tr2 = gpu.traffic();
         let s_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let st = smc.steps();
+        let st = smc.timings();
         let t0 = Instant::now();
         let u = maps.update(&sc, &set);
         let m_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -213,9 +166,9 @@ pub fn bench_scene(gpu: &Gpu, spec: &GpuBenchSpec) -> Result<GpuBenchRow, BenchE
                 d.read_ms,
                 g_ms + m_ms + d.gather_ms + d.filter_ms,
                 total,
-                st[0],
-                st[1],
-                st[2],
+                st.candidates_ms + st.visibility_ms,
+                st.radiosity_ms,
+                st.knn_ms,
             ]);
         }
     }
@@ -261,13 +214,12 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
     md.push_str("*SMC*: `host` is the default SMC (Voronoi flux) on the host with its rays and radiosities on the device; `device` is SMC with the paper's kNN flux, every line of Algorithm 1 on the device.\n\n");
     md.push_str("| scene | SMC | triangles | VPLs | size | G-buffer | G-buffer read | SMC sampling | shadow maps (moved) | upload | gather | filter | image read | kernels | frame | all maps (first frame) |\n");
     md.push_str("| --- | --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
-    let place = |p: SmcPlace| if p == SmcPlace::Host { "host" } else { "device" };
     for r in rows {
         let _ = writeln!(
             md,
             "| `{}` | {} | {} | {} | {}×{} | {:.2} | {:.2} | {:.2} | {:.2} ({:.0}) | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} ({}) |",
             r.scene,
-            place(r.smc),
+            r.smc.name(),
             r.triangles,
             r.vpls,
             r.size.0,
@@ -287,9 +239,18 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
             r.all_maps_count
         );
     }
-    md.push_str("\nSMC sampling by step (ms; rays and radiosity on the GPU, the rest on the CPU):\n\n| scene | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL, GPU) | kNN (CPU) | total |\n| --- | ---: | ---: | ---: | ---: |\n");
-    for r in rows.iter().filter(|r| r.smc == SmcPlace::Host) {
-        let _ = writeln!(md, "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} |", r.scene, r.smc_rays, r.smc_radiosity, r.smc_knn, r.sampling);
+    md.push_str("\nSMC sampling by step (ms). *host*: rays and radiosity on the device, kNN and the cells on the host; *device*: every stage on the device, timed there by timestamps (0 where the adapter has none):\n\n| scene | SMC | camera, candidate and visibility rays | radiosity (16 NEE paths per candidate and new VPL) | kNN | total |\n| --- | --- | ---: | ---: | ---: | ---: |\n");
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            r.scene,
+            r.smc.name(),
+            r.smc_rays,
+            r.smc_radiosity,
+            r.smc_knn,
+            r.sampling
+        );
     }
     md.push_str("\nHost↔device traffic per frame (medians; the counts do not depend on the device's speed). *Resident*: the G-buffer and the image stay on the device; otherwise both are read back every frame:\n\n| scene | SMC | resident | up (KiB) | writes | down (KiB) | reads | submissions | of which SMC: up (KiB) | down (KiB) | submissions |\n| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
     let kib = |b: u64| b as f64 / 1024.0;
@@ -299,7 +260,7 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
             md,
             "| `{}` | {} | {} | {:.1} | {} | {:.1} | {} | {} | {:.1} | {:.1} | {} |",
             r.scene,
-            place(r.smc),
+            r.smc.name(),
             if r.resident { "yes" } else { "no" },
             kib(t.bytes_up),
             t.writes,

@@ -3,13 +3,14 @@
 
 use crate::error::BenchError;
 use crate::pipeline::{BackendKind, ShadingSpec, VisibilitySpec};
+use crate::smc_step::{SmcPlace, SmcStep};
 use crate::stages::median;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 use vpl_core::image::write_atomic;
-use vpl_core::{Budget, CoreError, Frame, GBuffer, GeometryClamp, SceneSetup, VplSampler};
-use vpl_sampling::{SmcConfig, SmcSampler};
+use vpl_core::{Budget, CoreError, Frame, GBuffer, GeometryClamp, SceneSetup};
+use vpl_sampling::SmcConfig;
 
 /// The paper's Table 2 rows: scene, its stand-in here, triangles, VPLs, then
 /// the ten timing columns of [`Table2Row::columns`] (GTX Titan X, 1920×1080).
@@ -87,24 +88,38 @@ impl Table2Row {
     }
 }
 
+/// One scene of Table 2.
+#[derive(Clone, Copy, Debug)]
+pub struct Table2Spec<'a> {
+    /// Built-in scene.
+    pub scene: &'a str,
+    /// The paper's scene it stands in for.
+    pub paper_scene: &'a str,
+    /// Image size.
+    pub size: (u32, u32),
+    /// VPL budget.
+    pub vpls: usize,
+    /// First frame of the scene's sequence.
+    pub start: u32,
+    /// Frames timed (after the first).
+    pub frames: u32,
+    /// Where the G-buffer, shadow maps and shading run.
+    pub backend: BackendKind,
+    /// Where SMC runs ([`SmcPlace::Device`] needs the GPU backend).
+    pub smc: SmcPlace,
+}
+
 /// Times `frames` SMC frames of `scene`'s sequence from frame `start` at
 /// `size` with budget `vpls` (after the first frame, whose warm-up and
 /// full set of shadow maps are not timed): the sampler's steps, the shadow
 /// maps of moved VPLs (128²) and interleaved shading with the filter.
-pub fn time_scene(
-    scene_name: &str,
-    paper_scene: &str,
-    size: (u32, u32),
-    vpls: usize,
-    start: u32,
-    frames: u32,
-    backend: BackendKind,
-) -> Result<(Table2Row, Option<String>), BenchError> {
+pub fn time_scene(spec: &Table2Spec) -> Result<(Table2Row, Option<String>), BenchError> {
+    let Table2Spec { scene: scene_name, paper_scene, size, vpls, start, frames, backend, smc: place } = *spec;
     let setup = SceneSetup::load(scene_name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
-    let backend = backend.instantiate()?;
-    let mut smc = SmcSampler::with_services(SmcConfig { vpls, ..SmcConfig::default() }, &backend.services())?;
+    let config = SmcConfig { vpls, ..SmcConfig::default() };
+    let (backend, mut smc) = sampler(backend, place, config)?;
     let budget = Budget::new(vpls, 5);
     let mut sm = backend.visibility(VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION), &budget)?;
     let mut shader = backend.shader(ShadingSpec::Interleaved { filter: true }, Some(clamp), 0)?;
@@ -161,6 +176,35 @@ pub fn time_scene(
         moved: col(8),
     };
     Ok((row, backend.device()))
+}
+
+/// The backend and the sampler of a run: SMC on the host with the
+/// backend's services, or on the device of the GPU backend.
+fn sampler(backend: BackendKind, place: SmcPlace, config: SmcConfig) -> Result<(Box<dyn vpl_render::Backend>, SmcStep), BenchError> {
+    match place {
+        SmcPlace::Host => {
+            let backend = backend.instantiate()?;
+            let smc = SmcStep::host(config, &backend.services())?;
+            Ok((backend, smc))
+        }
+        SmcPlace::Device => device_sampler(backend, config),
+    }
+}
+
+#[cfg(feature = "gpu")]
+fn device_sampler(backend: BackendKind, config: SmcConfig) -> Result<(Box<dyn vpl_render::Backend>, SmcStep), BenchError> {
+    if backend != BackendKind::Gpu {
+        return Err(vpl_render::RenderError::Invalid("--smc device needs --backend gpu".into()).into());
+    }
+    let gpu = vpl_gpu::backend()?;
+    let smc = SmcStep::device(gpu.gpu(), config)?;
+    Ok((Box::new(gpu), smc))
+}
+
+#[cfg(not(feature = "gpu"))]
+fn device_sampler(_: BackendKind, _: SmcConfig) -> Result<(Box<dyn vpl_render::Backend>, SmcStep), BenchError> {
+    Err(vpl_render::RenderError::Invalid("--smc device needs the GPU backend (build vpl-bench with its default feature `gpu`)".into())
+        .into())
 }
 
 /// Writes `table2.md`, `table2.csv` and `table2.json` into `dir`.

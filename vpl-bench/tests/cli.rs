@@ -312,6 +312,8 @@ fn experiment_commands_refuse_bad_input_in_one_line() {
         (vec!["table1", "--shard", "2/2", "--out", &out_s], "index must be below"),
         (vec!["merge", &out_s], "no Table 1 run"),
         (vec!["table2", "--frames", "0", "--out", &out_s], "--frames must be at least 1"),
+        (vec!["table2", "--smc", "device", "--out", &out_s], "--smc device needs --backend gpu"),
+        (vec!["table2", "--smc", "gpu", "--out", &out_s], "--smc: 'gpu': host or device"),
         (vec!["figures", "--only", "9", "--out", &out_s], "no figure 9"),
         (vec!["figures", "--scenes", "nowhere", "--out", &out_s], "nowhere"),
         (vec!["progressive-figures", "--only", "9", "--out", &out_s], "no figure 9"),

@@ -120,13 +120,22 @@ impl GpuContext {
 
     fn open(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<GpuContext, GpuError> {
         let info = adapter.get_info();
+        // Timestamps between passes, where the adapter has them: the stages
+        // of a submission timed on the device (`GpuSmcSampler::profile`).
+        let timestamps = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("vpl-gpu"),
             required_limits: adapter.limits(),
+            required_features: adapter.features() & timestamps,
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
         Ok(GpuContext { device, queue, info, instance, adapter, counters: Counters::default() })
+    }
+
+    /// Whether the device writes timestamps between the passes of an encoder.
+    pub fn has_timestamps(&self) -> bool {
+        self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
     }
 
     /// What has crossed between host and device so far.

@@ -115,13 +115,20 @@ pub(crate) struct BoundSearch {
     /// parameters differ in `row` alone.
     groups: [wgpu::BindGroup; 3],
     shapes: [(u32, u32, u32); 3],
+    /// Blocks of cells the scan covers: this search's grid, not the buffers'.
+    blocks: u32,
+}
+
+/// About 8 cells a point, in whole scan blocks, at most `BLOCK²`.
+fn cells_for(points: u64) -> u64 {
+    (8 * points.max(8)).next_multiple_of(BLOCK).min(BLOCK * BLOCK)
 }
 
 impl NeighbourSearch {
     /// Buffers for grids over at most `points` points: about 8 cells a
     /// point, at most `BLOCK²`.
     pub(crate) fn new(ctx: &GpuContext, points: u64) -> Result<NeighbourSearch, GpuError> {
-        let max_cells = (8 * points.max(8)).next_multiple_of(BLOCK).min(BLOCK * BLOCK);
+        let max_cells = cells_for(points);
         Ok(NeighbourSearch {
             points,
             max_cells,
@@ -148,7 +155,9 @@ impl NeighbourSearch {
     ) -> BoundSearch {
         debug_assert!(points.count <= self.points);
         let n_queries = queries.map_or(points.count, |q| q.count);
-        let shapes = [groups_1d(ctx, points.count, 64), groups_1d(ctx, self.max_cells, 256), groups_1d(ctx, n_queries, 64)];
+        // A grid sized for these points, within the buffers'.
+        let max_cells = cells_for(points.count).min(self.max_cells);
+        let shapes = [groups_1d(ctx, points.count, 64), groups_1d(ctx, max_cells, 256), groups_1d(ctx, n_queries, 64)];
         let rows = [shapes[0].0 * 64, shapes[1].0 * 256, shapes[2].0 * 64];
         let group = |row: u32| {
             let params = Params {
@@ -157,7 +166,7 @@ impl NeighbourSearch {
                 k,
                 members: queries.is_none() as u32,
                 row,
-                max_cells: self.max_cells as u32,
+                max_cells: max_cells as u32,
                 pad: [0; 2],
             };
             let p = uniform(ctx, "grid params", &params);
@@ -181,17 +190,16 @@ impl NeighbourSearch {
                 entries: &entries,
             })
         };
-        BoundSearch { groups: [group(rows[0]), group(rows[1]), group(rows[2])], shapes }
+        BoundSearch { groups: [group(rows[0]), group(rows[1]), group(rows[2])], shapes, blocks: (max_cells / BLOCK) as u32 }
     }
 
     /// Records the grid's build and the queries: seven dispatches.
     pub(crate) fn record(&self, enc: &mut wgpu::CommandEncoder, kernels: &Kernels, s: &BoundSearch) {
         let [g_points, g_cells, g_queries] = &s.groups;
         let [points, cells, queries] = s.shapes;
-        let blocks = (self.max_cells / BLOCK) as u32;
         dispatch(enc, &kernels.bounds, &[g_points], (1, 1, 1));
         dispatch(enc, &kernels.count, &[g_points], points);
-        dispatch(enc, &kernels.scan_blocks, &[g_cells], (blocks, 1, 1));
+        dispatch(enc, &kernels.scan_blocks, &[g_cells], (s.blocks, 1, 1));
         dispatch(enc, &kernels.scan_sums, &[g_cells], (1, 1, 1));
         dispatch(enc, &kernels.scan_add, &[g_cells], cells);
         dispatch(enc, &kernels.scatter, &[g_points], points);

@@ -36,7 +36,7 @@ use vpl_core::rng::stream_key;
 use vpl_core::scene::LightingKey;
 use vpl_core::{Camera, Frame, Purpose, Scene, Stats, Vpl, VplSampler, VplSet};
 use vpl_pathtrace::PathRadiosity;
-use vpl_smc::{FluxEstimator, Placement, SmcConfig, SmcStats};
+use vpl_smc::{FluxEstimator, Placement, SmcConfig, SmcStats, SmcTimings};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -191,7 +191,24 @@ pub struct GpuSmcSampler {
     set: VplSet,
     stats: SmcStats,
     ms: f64,
+    profile: Option<Profile>,
+    timings: SmcTimings,
 }
+
+/// Timestamps written between the stages of the iteration that ends a frame.
+struct Profile {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    /// Nanoseconds a tick.
+    period: f64,
+}
+
+/// Timestamps an iteration writes: before it, and after each of its stages.
+const STAMPS: u32 = 11;
+
+/// Rows of 16 B the timestamps take after the statistics, so that they
+/// come back in the same read.
+const STAMP_ROWS: u64 = (STAMPS as u64 * 8).div_ceil(16);
 
 impl std::fmt::Debug for GpuSmcSampler {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -230,7 +247,8 @@ impl GpuSmcSampler {
         let pts = storage(ctx, "smc points", (6 * s.cs + s.ns) * 16)?;
         let f32s = storage(ctx, "smc floats", (s.c + s.n) * 4)?;
         let particles = storage(ctx, "smc particles", 9 * s.ns * 16)?;
-        let out = storage(ctx, "smc out", (3 * s.n + 4) * 16)?;
+        // The VPL rows, the statistics, and room for the stages' timestamps.
+        let out = storage(ctx, "smc out", (3 * s.n + 4 + STAMP_ROWS) * 16)?;
         let rjobs = storage(ctx, "smc radiosity jobs", 2 * s.n * 48)?;
         let rkeys = storage(ctx, "smc radiosity keys", 2 * s.n * 8)?;
         let rpaths = storage(ctx, "smc radiosity paths", 2 * s.n * config.radiosity_paths.max(1) as u64 * 16)?;
@@ -258,7 +276,45 @@ impl GpuSmcSampler {
             set: VplSet::new(config.vpls),
             stats: SmcStats::default(),
             ms: 0.0,
+            profile: None,
+            timings: SmcTimings::default(),
         })
+    }
+
+    /// Times the stages of each frame's last iteration on the device, in
+    /// the columns of the paper's Table 2 ([`GpuSmcSampler::timings`]): 88 B
+    /// more in the frame's one read. Returns whether the stages are timed:
+    /// `on`, where the device writes timestamps between passes (where it
+    /// does not, only the step's wall time is known).
+    pub fn profile(&mut self, on: bool) -> bool {
+        let ctx = self.gpu.ctx();
+        if !on || !ctx.has_timestamps() {
+            self.profile = None;
+            return false;
+        }
+        let queries = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("smc stages"),
+            ty: wgpu::QueryType::Timestamp,
+            count: STAMPS,
+        });
+        let resolved = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("smc stages"),
+            size: STAMPS as u64 * 8,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        self.profile = Some(Profile { queries, resolved, period: ctx.queue.get_timestamp_period() as f64 });
+        true
+    }
+
+    /// Milliseconds of the last frame's last iteration by stage, measured on
+    /// the device when [`GpuSmcSampler::profile`] is on (else only
+    /// `total_ms`, the frame's wall time, warm-up included on the first).
+    /// Candidate sampling takes the camera points, the candidate rays and
+    /// lines 9–17; kNN the three grids and their queries, the densities and
+    /// the fluxes.
+    pub fn timings(&self) -> SmcTimings {
+        self.timings
     }
 
     /// The configuration.
@@ -349,27 +405,42 @@ impl GpuSmcSampler {
         let groups = [&gs.group, &b.group];
         let one = (1, 1, 1);
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("smc iteration") });
+        let profile = self.profile.as_ref().filter(|_| read);
+        let stamp = |enc: &mut wgpu::CommandEncoder, i: u32| {
+            if let Some(p) = profile {
+                enc.write_timestamp(&p.queries, i);
+            }
+        };
+        stamp(&mut enc, 0);
         // Line 3.
         dispatch(&mut enc, &kn.camera_points, &groups, g_c);
         dispatch(&mut enc, &kn.compact_x, &groups, one);
+        stamp(&mut enc, 1);
         // Line 4.
         dispatch(&mut enc, &kn.visibility, &groups, g_n);
+        stamp(&mut enc, 2);
         // Lines 5 and 6.
         dispatch(&mut enc, &kn.candidate_rays, &groups, g_c);
+        stamp(&mut enc, 3);
         b.search.record(&mut enc, nk, &b.hits);
+        stamp(&mut enc, 4);
         dispatch(&mut enc, &kn.weights, &groups, g_c);
         dispatch(&mut enc, &kn.scan_weights, &groups, one);
         dispatch(&mut enc, &kn.draw, &groups, g_d);
         dispatch(&mut enc, &kn.take, &groups, one);
+        stamp(&mut enc, 5);
         // Line 7.
         dispatch(&mut enc, &kn.candidate_jobs, &groups, g_n);
         dispatch(&mut enc, &kn.radiosity.paths, &[&gs.group, &g_cand], cand_paths);
         dispatch(&mut enc, &kn.radiosity.sum, &[&gs.group, &g_cand], cand_sums);
+        stamp(&mut enc, 6);
         // Line 8.
         b.search.record(&mut enc, nk, &b.candidates);
         dispatch(&mut enc, &kn.candidate_intensity, &groups, g_n);
+        stamp(&mut enc, 7);
         // Lines 9–17.
         dispatch(&mut enc, &kn.decide, &groups, one);
+        stamp(&mut enc, 8);
         // Line 18.
         let (jobs, radiance) = if relit { (&kn.relit_jobs, &kn.relit_radiance) } else { (&kn.added_jobs, &kn.added_radiance) };
         dispatch(&mut enc, jobs, &groups, g_n);
@@ -389,16 +460,36 @@ impl GpuSmcSampler {
             pass.dispatch_workgroups_indirect(&b.state, 20 * 4);
         }
         dispatch(&mut enc, radiance, &groups, g_n);
+        stamp(&mut enc, 9);
         // Line 19 and the output.
         b.search.record(&mut enc, nk, &b.set);
         dispatch(&mut enc, &kn.fluxes, &groups, g_n);
         dispatch(&mut enc, &kn.stats, &groups, one);
+        stamp(&mut enc, 10);
+        if let Some(p) = profile {
+            enc.resolve_query_set(&p.queries, 0..STAMPS, &p.resolved, 0);
+            enc.copy_buffer_to_buffer(&p.resolved, 0, &b.out, (3 * s.n + 4) * 16, STAMPS as u64 * 8);
+        }
         self.iterations += 1;
         if !read {
             ctx.submit([enc.finish()]);
             return Ok(());
         }
-        let rows: Vec<Vec4> = crate::kernel::finish_read(ctx, enc, &b.out, 3 * s.n as usize + 4)?;
+        let extra = if profile.is_some() { STAMP_ROWS as usize } else { 0 };
+        let rows: Vec<Vec4> = crate::kernel::finish_read(ctx, enc, &b.out, 3 * s.n as usize + 4 + extra)?;
+        if let Some(p) = profile {
+            let words: Vec<u32> = rows[3 * s.n as usize + 4..].iter().flat_map(|r| r.to_array().map(f32::to_bits)).collect();
+            let t: Vec<u64> = (0..STAMPS as usize).map(|i| words[2 * i] as u64 | (words[2 * i + 1] as u64) << 32).collect();
+            let ms = |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * p.period * 1e-6;
+            self.timings = SmcTimings {
+                candidates_ms: ms(0, 1) + ms(2, 3) + ms(7, 8),
+                resampling_ms: ms(4, 5),
+                visibility_ms: ms(1, 2),
+                radiosity_ms: ms(5, 6) + ms(8, 9),
+                knn_ms: ms(3, 4) + ms(6, 7) + ms(9, 10),
+                total_ms: ms(0, 10),
+            };
+        }
         self.set.begin_frame();
         for slot in 0..s.n as usize {
             let (a, b2, f) = (rows[3 * slot], rows[3 * slot + 1], rows[3 * slot + 2]);
@@ -411,7 +502,7 @@ impl GpuSmcSampler {
             });
             self.set.set(slot, vpl);
         }
-        let st: Vec<u32> = rows[3 * s.n as usize..].iter().flat_map(|r| r.to_array().map(f32::to_bits)).collect();
+        let st: Vec<u32> = rows[3 * s.n as usize..3 * s.n as usize + 4].iter().flat_map(|r| r.to_array().map(f32::to_bits)).collect();
         self.stats = SmcStats {
             iterations: self.iterations,
             camera_points: st[0] as usize,
@@ -443,6 +534,9 @@ impl GpuSmcSampler {
         }
         self.iterate(scene, camera, seed, true)?;
         self.ms = t0.elapsed().as_secs_f64() * 1e3;
+        if self.profile.is_none() {
+            self.timings = SmcTimings { total_ms: self.ms, ..SmcTimings::default() };
+        }
         Ok(&self.set)
     }
 }
@@ -469,7 +563,8 @@ impl VplSampler for GpuSmcSampler {
 
     fn stats(&self) -> Stats {
         let s = self.stats;
-        Stats::new()
+        let t = self.timings;
+        let stats = Stats::new()
             .count("stored", s.stored)
             .count("iterations", s.iterations as usize)
             .count("hits", s.hits)
@@ -483,6 +578,17 @@ impl VplSampler for GpuSmcSampler {
             .count("added", s.added)
             .count("relit", s.relit as usize)
             .value("intensity_cv", s.intensity_cv as f64)
-            .ms("ms", self.ms)
+            .ms("ms", self.ms);
+        if self.profile.is_none() {
+            return stats;
+        }
+        // The stages as the device timed them.
+        stats
+            .ms("candidates_ms", t.candidates_ms)
+            .ms("resampling_ms", t.resampling_ms)
+            .ms("visibility_ms", t.visibility_ms)
+            .ms("radiosity_ms", t.radiosity_ms)
+            .ms("knn_ms", t.knn_ms)
+            .ms("device_ms", t.total_ms)
     }
 }

@@ -131,3 +131,38 @@ fn the_devices_smc_reports_relighting() {
     }
     assert_eq!(relit, [false, false, true]);
 }
+
+/// Where the device writes timestamps, the sampler times its stages there:
+/// each stage's time is non-negative and they add up to the device's time
+/// of the iteration (the stamps bracket every dispatch), which the frame's
+/// wall time bounds.
+#[test]
+fn the_devices_smc_times_its_stages_on_the_device() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let setup = SceneSetup::load("cornell").unwrap();
+    let config = SmcConfig { vpls: 128, warmup: 2, flux: FluxEstimator::Knn, ..SmcConfig::default() };
+    let mut dev = GpuSmcSampler::new(gpu.clone(), config).unwrap();
+    let timed = dev.profile(true);
+    eprintln!("timestamps: {timed}");
+    let empty = GBuffer::empty();
+    let camera = setup.camera.with_resolution((32, 32)).unwrap();
+    for f in 0..2 {
+        let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index: f, seed: 1, gbuffer: &empty, previous: None };
+        dev.next_frame(&frame);
+    }
+    let t = dev.timings();
+    let wall = VplSampler::stats(&dev).get("ms").unwrap();
+    eprintln!("{t:?}, wall {wall} ms");
+    if !timed {
+        assert!(!gpu.ctx().has_timestamps());
+        assert_eq!(t.total_ms, wall);
+        return;
+    }
+    let parts = [t.candidates_ms, t.resampling_ms, t.visibility_ms, t.radiosity_ms, t.knn_ms];
+    assert!(parts.iter().all(|&p| p >= 0.0 && p.is_finite()), "{t:?}");
+    let sum: f64 = parts.iter().sum();
+    assert!((sum - t.total_ms).abs() <= 1e-6 * t.total_ms.max(1.0), "the stages add to {sum} ms, the iteration took {} ms", t.total_ms);
+    assert!(t.total_ms > 0.0 && t.total_ms <= wall, "{} ms on the device in a frame of {wall} ms", t.total_ms);
+    assert!(VplSampler::stats(&dev).get("knn_ms").is_some());
+}

@@ -13,9 +13,15 @@ pub(super) struct Args {
     /// Frames timed per scene (after one warm-up frame).
     #[arg(long, default_value_t = 10)]
     frames: u32,
-    /// Where the G-buffer, shadow maps and shading run (sampling stays on the CPU).
+    /// Where the G-buffer, shadow maps and shading run.
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     backend: BackendArg,
+    /// Where SMC runs: `host` (the default SMC, with the backend's rays and
+    /// radiosities) or `device` (the paper's kNN flux, every stage on the
+    /// GPU, timed there; needs `--backend gpu`). Default: `device` with
+    /// the GPU backend, else `host`.
+    #[arg(long)]
+    smc: Option<String>,
     /// Scenes (comma-separated; default the paper's four: courtyard, office, atrium, maze).
     #[arg(long = "scene", value_delimiter = ',')]
     scenes: Vec<String>,
@@ -29,9 +35,18 @@ pub(super) struct Args {
 
 /// Runs `vpl table2`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
-    let Args { size: Size(w, h), frames, backend, scenes, threads, out } = args;
+    let Args { size: Size(w, h), frames, backend, scenes, threads, out, smc } = args;
     if frames == 0 {
         return Err("--frames must be at least 1".into());
+    }
+    let gpu = backend.backend() == crate::pipeline::BackendKind::Gpu;
+    let smc: crate::smc_step::SmcPlace = match smc {
+        Some(s) => s.parse().map_err(|e| format!("--smc: {e}"))?,
+        None if gpu => crate::smc_step::SmcPlace::Device,
+        None => crate::smc_step::SmcPlace::Host,
+    };
+    if smc == crate::smc_step::SmcPlace::Device && !gpu {
+        return Err("--smc device needs --backend gpu".into());
     }
     let pool = pool(threads)?;
     if let Some(bad) = scenes.iter().find(|s| !crate::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
@@ -46,11 +61,19 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         }
         eprintln!("vpl: table2: {scene} ({vpls} VPLs, {w}x{h}, {frames} frames)");
         let start = crate::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
-        let (row, adapter) = pool
-            .install(|| crate::table2::time_scene(scene, paper, (w, h), vpls, start, frames, backend.backend()))
-            .map_err(|e| e.to_string())?;
+        let spec =
+            crate::table2::Table2Spec { scene, paper_scene: paper, size: (w, h), vpls, start, frames, backend: backend.backend(), smc };
+        let (row, adapter) = pool.install(|| crate::table2::time_scene(&spec)).map_err(|e| e.to_string())?;
         if let Some(a) = adapter {
-            device = format!("{a} for the G-buffer, shadow maps and shading; sampling on the CPU ({} threads)", pool.current_num_threads());
+            device = match smc {
+                crate::smc_step::SmcPlace::Device => format!(
+                    "{a}: SMC with the paper's kNN flux wholly on the device (its columns timed there by timestamps), the G-buffer, shadow maps and shading"
+                ),
+                crate::smc_step::SmcPlace::Host => format!(
+                    "{a} for the G-buffer, shadow maps, shading and SMC's rays and radiosities; the rest of sampling on the CPU ({} threads)",
+                    pool.current_num_threads()
+                ),
+            };
         }
         rows.push(row);
     }

@@ -17,6 +17,11 @@ pub enum GpuError {
     /// The input does not fit the kernel.
     #[error("{0}")]
     Invalid(String),
+    /// A kernel's answers contradict themselves: the device stopped its
+    /// loops early (llvmpipe stops an invocation group's loops after 65,535
+    /// iterations in all).
+    #[error("the device cut {0} short: its answers are incomplete (llvmpipe stops a kernel's loops after 65,535 iterations)")]
+    CutShort(&'static str),
 }
 
 /// An adapter, its device and queue, and the count of what crossed

@@ -246,6 +246,12 @@ impl Gpu {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         search.record(&mut enc, kernels, &bound);
         let answers: Vec<[u32; 4]> = finish_read(ctx, enc, &b_answers, n_queries)?;
+        // Every query finds min(k, the points there are) neighbours; fewer
+        // means the device stopped searching early.
+        let available = if queries.is_none() { points.len() - 1 } else { points.len() };
+        if answers.iter().any(|a| (a[3] as usize) < k.min(available)) {
+            return Err(GpuError::CutShort("a nearest-neighbour search"));
+        }
         Ok(answers
             .into_iter()
             .map(|a| Neighbours {

@@ -55,7 +55,8 @@ struct It {
     two_sided: u32,
     paths: u32,
     row_d: u32,
-    pad0: [u32; 2],
+    k: u32,
+    pad0: u32,
     eps: f32,
     quantile: f32,
     area: f32,
@@ -366,7 +367,8 @@ impl GpuSmcSampler {
             two_sided: scene.two_sided as u32,
             paths: c.radiosity_paths.max(1),
             row_d: g_d.0 * 64,
-            pad0: [0; 2],
+            k: c.k() as u32,
+            pad0: 0,
             eps: scene.epsilon(),
             quantile: c.strong_quantile,
             area: scene.surface_area(),
@@ -503,6 +505,9 @@ impl GpuSmcSampler {
             self.set.set(slot, vpl);
         }
         let st: Vec<u32> = rows[3 * s.n as usize..3 * s.n as usize + 4].iter().flat_map(|r| r.to_array().map(f32::to_bits)).collect();
+        if st[15] != 0 {
+            return Err(GpuError::CutShort("SMC's neighbour searches"));
+        }
         self.stats = SmcStats {
             iterations: self.iterations,
             camera_points: st[0] as usize,

@@ -36,7 +36,8 @@ struct It {
     paths: u32,
     // `row` of the draws' dispatch.
     row_d: u32,
-    pad0: u32,
+    // Eq. 8's k.
+    k: u32,
     pad1: u32,
     eps: f32,
     quantile: f32,
@@ -85,6 +86,9 @@ const S_REMOVED: u32 = 11u;
 const S_ADDED: u32 = 12u;
 const S_STORED: u32 = 13u;
 const S_CV: u32 = 14u;
+// Set when a search came back with fewer neighbours than it must have:
+// the device cut its loops short.
+const S_CUT: u32 = 15u;
 // Indirect dispatch sizes of the new VPLs' radiosity: paths, then sums.
 const S_PATHS_GROUPS: u32 = 16u;
 const S_SUM_GROUPS: u32 = 20u;
@@ -365,6 +369,8 @@ fn weights(@builtin(global_invocation_id) id: vec3<u32>) {
             w = 1.0;
         } else if (answers[j].y != NONE) {
             w = bitcast<f32>(answers[j].z);
+        } else {
+            atomicStore(&state[S_CUT], 1u);
         }
     }
     if (!finite(w) || w < 0.0) { w = 0.0; }
@@ -521,7 +527,7 @@ fn candidate_intensity(@builtin(global_invocation_id) id: vec3<u32>) {
     if (n > 0u) {
         let a = answers[i];
         var r2 = 3.4e38;
-        if (a.w >= 1u) { r2 = bitcast<f32>(a.x); }
+        if (a.w >= 1u) { r2 = bitcast<f32>(a.x); } else { atomicStore(&state[S_CUT], 1u); }
         p = 1.0 / (f32(n) * PI * r2);
     }
     let l = rsum[i].xyz / f32(it.paths);
@@ -732,6 +738,7 @@ fn fluxes(@builtin(global_invocation_id) id: vec3<u32>) {
         let a = answers[s];
         var r2 = 3.4e38;
         if (a.w >= 1u) { r2 = bitcast<f32>(a.x); }
+        if (a.w < min(it.k, n - 1u)) { atomicStore(&state[S_CUT], 1u); }
         p = f32(a.w) / (f32(n) * PI * r2);
     }
     let l = particles[pl(s)].xyz;
@@ -791,6 +798,7 @@ fn stats(@builtin(local_invocation_index) li: u32) {
     var row: array<u32, 16>;
     for (var k = 0u; k < 14u; k = k + 1u) { row[k] = atomicLoad(&state[k]); }
     row[S_CV] = bitcast<u32>(cv);
+    row[S_CUT] = atomicLoad(&state[S_CUT]);
     for (var r = 0u; r < 4u; r = r + 1u) {
         out[base + r] = vec4<f32>(bitcast<f32>(row[4u * r]), bitcast<f32>(row[4u * r + 1u]), bitcast<f32>(row[4u * r + 2u]), bitcast<f32>(row[4u * r + 3u]));
     }

@@ -80,3 +80,30 @@ fn the_devices_neighbours_are_the_k_d_trees() {
     assert!(gpu.neighbours(&volume, None, 0).is_err() && gpu.neighbours(&volume, None, 65).is_err());
     assert!(gpu.neighbours(&[Vec3::splat(f32::NAN)], None, 1).is_err());
 }
+
+/// A search whose loops run long (every point in one cell, 64 neighbours
+/// kept in order: about 100,000 iterations a query) either answers right
+/// or says the device cut it short (llvmpipe stops a kernel's loops after
+/// 65,535 iterations); it never answers wrong.
+#[test]
+fn a_search_is_right_or_refused_never_wrong() {
+    let Some(ctx) = context() else { return };
+    let gpu = Gpu::from_context(ctx);
+    let mut rng = stream(2, 0, Purpose::TEST, 0);
+    // 3000 points in a ball of 1 mm, and a lone point far away that stretches the grid.
+    let mut points: Vec<Vec3> = (0..3000).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 1e-3).collect();
+    points.push(Vec3::splat(10.0));
+    let host = KnnDensity::new(&points).unwrap().member_radii_sq(64);
+    match gpu.neighbours(&points, None, 64) {
+        Ok(dev) => {
+            for (i, (d, h)) in dev.iter().zip(&host).enumerate() {
+                assert!(close(d.kth_sq, *h), "point {i}: {} on the device, {h} on the host", d.kth_sq);
+            }
+            eprintln!("the device answered every search");
+        }
+        Err(e) => {
+            assert!(matches!(e, vpl_gpu::GpuError::CutShort(_)), "{e}");
+            eprintln!("refused: {e}");
+        }
+    }
+}

@@ -45,35 +45,9 @@ struct BounceParams {
 @group(1) @binding(3) var<storage, read> origins: array<vec2<u32>>;
 @group(1) @binding(4) var<storage, read_write> bounce_hits: array<u32>;
 
-struct CameraRay {
-    o: vec3<f32>,
-    d: vec3<f32>,
-}
-
 // Camera ray j, as vpl_core::CameraRays::ray.
 fn camera_ray(j: u32) -> CameraRay {
-    let r = keyed_state(vec2<u32>(params.key_lo, params.key_hi), j);
-    rng_state = r.xy;
-    rng_inc = r.zw;
-    let w = params.raster.x;
-    let h = params.raster.y;
-    let u = next_f32();
-    let v = next_f32();
-    let lu = next_f32();
-    let lv = next_f32();
-    let ndc_x = 2.0 * (u * w) / w - 1.0;
-    let ndc_y = 1.0 - 2.0 * (v * h) / h;
-    let d = params.forward.xyz + params.right.xyz * (ndc_x * params.forward.w) + params.up.xyz * (ndc_y * params.right.w);
-    var o = params.origin.xyz;
-    var dir = normalize(d);
-    if (params.raster.z > 0.0) {
-        // Thin lens: from a point of the aperture toward the point in focus.
-        let focus = o + d * params.up.w;
-        let l = concentric_disk(lu, lv) * params.raster.z;
-        o = o + params.right.xyz * l.x + params.up.xyz * l.y;
-        dir = normalize(focus - o);
-    }
-    return CameraRay(o, dir);
+    return camera_ray_of(params.origin, params.forward, params.right, params.up, params.raster, vec2<u32>(params.key_lo, params.key_hi), j);
 }
 
 @compute @workgroup_size(64)

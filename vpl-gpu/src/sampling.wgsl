@@ -121,3 +121,40 @@ fn to_world(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let t = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
     return s * v.x + t * v.y + n * v.z;
 }
+
+// ---- camera rays (vpl_core::CameraRays::ray) ----
+
+struct CameraRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+}
+
+// Ray j of a batch under `key`: (u, v) and then the lens sample from stream
+// j, through raster (u·w, v·h). The camera as four rows: the origin; the
+// forward axis with s_x in w; the right axis with s_y; the true up with the
+// focus distance; and the raster (width, height, lens radius (0: a pinhole), -).
+// Leaves the stream after the ray's four draws.
+fn camera_ray_of(origin: vec4<f32>, forward: vec4<f32>, right: vec4<f32>, up: vec4<f32>, raster: vec4<f32>, key: vec2<u32>, j: u32) -> CameraRay {
+    let r = keyed_state(key, j);
+    rng_state = r.xy;
+    rng_inc = r.zw;
+    let w = raster.x;
+    let h = raster.y;
+    let u = next_f32();
+    let v = next_f32();
+    let lu = next_f32();
+    let lv = next_f32();
+    let ndc_x = 2.0 * (u * w) / w - 1.0;
+    let ndc_y = 1.0 - 2.0 * (v * h) / h;
+    let d = forward.xyz + right.xyz * (ndc_x * forward.w) + up.xyz * (ndc_y * right.w);
+    var o = origin.xyz;
+    var dir = normalize(d);
+    if (raster.z > 0.0) {
+        // Thin lens: from a point of the aperture toward the point in focus.
+        let focus = o + d * up.w;
+        let l = concentric_disk(lu, lv) * raster.z;
+        o = o + right.xyz * l.x + up.xyz * l.y;
+        dir = normalize(focus - o);
+    }
+    return CameraRay(o, dir);
+}

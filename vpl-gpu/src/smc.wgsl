@@ -196,26 +196,8 @@ fn reflecting(o: vec3<f32>, d: vec3<f32>) -> Reflecting {
 fn camera_points(@builtin(global_invocation_id) id: vec3<u32>) {
     let j = id.x + id.y * it.row_c;
     if (j >= it.c) { return; }
-    // vpl_core::CameraRays::ray(j).
-    seed_stream(j, it.key_cam);
-    let w = it.raster.x;
-    let h = it.raster.y;
-    let u = next_f32();
-    let v = next_f32();
-    let lu = next_f32();
-    let lv = next_f32();
-    let ndc_x = 2.0 * (u * w) / w - 1.0;
-    let ndc_y = 1.0 - 2.0 * (v * h) / h;
-    let dd = it.forward.xyz + it.right.xyz * (ndc_x * it.forward.w) + it.up.xyz * (ndc_y * it.right.w);
-    var o = it.origin.xyz;
-    var d = normalize(dd);
-    if (it.raster.z > 0.0) {
-        let focus = o + dd * it.up.w;
-        let l = concentric_disk(lu, lv) * it.raster.z;
-        o = o + it.right.xyz * l.x + it.up.xyz * l.y;
-        d = normalize(focus - o);
-    }
-    let r = reflecting(o, d);
+    let ray = camera_ray_of(it.origin, it.forward, it.right, it.up, it.raster, it.key_cam, j);
+    let r = reflecting(ray.o, ray.d);
     pts[xp(j)] = vec4<f32>(r.p, select(0.0, 1.0, r.ok));
     pts[xn(j)] = vec4<f32>(r.n, 0.0);
     pts[xng(j)] = vec4<f32>(r.ng, 0.0);

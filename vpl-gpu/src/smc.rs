@@ -567,33 +567,11 @@ impl VplSampler for GpuSmcSampler {
     }
 
     fn stats(&self) -> Stats {
-        let s = self.stats;
-        let t = self.timings;
-        let stats = Stats::new()
-            .count("stored", s.stored)
-            .count("iterations", s.iterations as usize)
-            .count("hits", s.hits)
-            .count("candidates", s.candidates)
-            .count("mailbox_valid", s.mailbox_valid)
-            .count("ray_valid", s.ray_valid)
-            .count("invalid", s.invalid)
-            .count("m_strong", s.m_strong)
-            .count("removed", s.removed)
-            .count("weakest", s.weakest)
-            .count("added", s.added)
-            .count("relit", s.relit as usize)
-            .value("intensity_cv", s.intensity_cv as f64)
-            .ms("ms", self.ms);
+        let stats = self.stats.counts().ms("ms", self.ms);
         if self.profile.is_none() {
             return stats;
         }
         // The stages as the device timed them.
-        stats
-            .ms("candidates_ms", t.candidates_ms)
-            .ms("resampling_ms", t.resampling_ms)
-            .ms("visibility_ms", t.visibility_ms)
-            .ms("radiosity_ms", t.radiosity_ms)
-            .ms("knn_ms", t.knn_ms)
-            .ms("device_ms", t.total_ms)
+        self.timings.steps(stats).ms("device_ms", self.timings.total_ms)
     }
 }

@@ -117,6 +117,39 @@ pub struct SmcStats {
     pub candidate_light: f64,
 }
 
+impl SmcStats {
+    /// The counts of Algorithm 1's last iteration as [`Stats`], in the
+    /// order every SMC sampler reports them (the host's and a device's).
+    pub fn counts(&self) -> Stats {
+        Stats::new()
+            .count("stored", self.stored)
+            .count("iterations", self.iterations as usize)
+            .count("hits", self.hits)
+            .count("candidates", self.candidates)
+            .count("mailbox_valid", self.mailbox_valid)
+            .count("ray_valid", self.ray_valid)
+            .count("invalid", self.invalid)
+            .count("m_strong", self.m_strong)
+            .count("removed", self.removed)
+            .count("weakest", self.weakest)
+            .count("added", self.added)
+            .count("relit", self.relit as usize)
+            .value("intensity_cv", self.intensity_cv as f64)
+    }
+}
+
+impl SmcTimings {
+    /// `stats` with the milliseconds of each step (Table 2's columns).
+    pub fn steps(&self, stats: Stats) -> Stats {
+        stats
+            .ms("candidates_ms", self.candidates_ms)
+            .ms("resampling_ms", self.resampling_ms)
+            .ms("visibility_ms", self.visibility_ms)
+            .ms("radiosity_ms", self.radiosity_ms)
+            .ms("knn_ms", self.knn_ms)
+    }
+}
+
 /// The Sequential Monte Carlo Instant Radiosity sampler (Algorithm 1).
 pub struct SmcSampler {
     config: SmcConfig,
@@ -732,30 +765,13 @@ impl VplSampler for SmcSampler {
 
     fn stats(&self) -> Stats {
         let s = self.stats;
-        let t = self.timings;
-        Stats::new()
-            .count("stored", s.stored)
-            .count("iterations", s.iterations as usize)
-            .count("hits", s.hits)
-            .count("candidates", s.candidates)
-            .count("mailbox_valid", s.mailbox_valid)
-            .count("ray_valid", s.ray_valid)
-            .count("invalid", s.invalid)
-            .count("m_strong", s.m_strong)
-            .count("removed", s.removed)
-            .count("weakest", s.weakest)
-            .count("added", s.added)
-            .count("relit", s.relit as usize)
-            .value("intensity_cv", s.intensity_cv as f64)
+        let stats = s
+            .counts()
             .value("knn_area_ratio", s.knn_area_ratio as f64)
             .value("candidate_light", s.candidate_light)
             .count("probe_rays", s.probe_rays)
-            .ms("ms", t.total_ms)
-            .ms("candidates_ms", t.candidates_ms)
-            .ms("resampling_ms", t.resampling_ms)
-            .ms("visibility_ms", t.visibility_ms)
-            .ms("radiosity_ms", t.radiosity_ms)
-            .ms("knn_ms", t.knn_ms)
+            .ms("ms", self.timings.total_ms);
+        self.timings.steps(stats)
     }
 }
 

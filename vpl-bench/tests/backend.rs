@@ -64,24 +64,28 @@ fn gpu_backend_renders_the_cpu_backends_frames() {
     }
 }
 
+/// Runs `vpl` with `args` and `--out` a fresh folder named after `name`;
+/// `None` (the test skips) when no adapter is found, unless VPL_REQUIRE_GPU=1.
+fn vpl_on_the_gpu(name: &str, args: &[&str]) -> Option<(std::process::Output, std::path::PathBuf)> {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vpl")).args(args).arg("--out").arg(&dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && !std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") && stderr.contains("adapter") {
+        eprintln!("skipped: {stderr}");
+        return None;
+    }
+    assert!(out.status.success(), "{stderr}");
+    Some((out, dir))
+}
+
 /// `vpl bench-gpu` measures SMC on the host and wholly on the device in one
 /// run, side by side; the device's step is one submission that reads back
 /// only the VPLs and the statistics.
 #[test]
 fn bench_gpu_measures_smc_on_the_host_and_on_the_device() {
-    let dir = std::env::temp_dir().join(format!("vpl-bench-gpu-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vpl"))
-        .args(["bench-gpu", "--scene", "cornell", "--size", "48x36", "--vpls", "64", "--frames", "2", "--smc", "host,device", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && !std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") && stderr.contains("adapter") {
-        eprintln!("skipped: {stderr}");
-        return;
-    }
-    assert!(out.status.success(), "{stderr}");
+    let args = ["bench-gpu", "--scene", "cornell", "--size", "48x36", "--vpls", "64", "--frames", "2", "--smc", "host,device"];
+    let Some((out, dir)) = vpl_on_the_gpu("vpl-bench-gpu", &args) else { return };
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("gpu_bench.json")).unwrap()).unwrap();
     let rows = json["rows"].as_array().unwrap();
     let places: Vec<&str> = rows.iter().map(|r| r["smc"].as_str().unwrap()).collect();
@@ -105,19 +109,8 @@ fn bench_gpu_measures_smc_on_the_host_and_on_the_device() {
 /// timestamps, as lavapipe and llvmpipe's GL do), and says so.
 #[test]
 fn table2_on_the_gpu_times_the_devices_smc() {
-    let dir = std::env::temp_dir().join(format!("vpl-table2-gpu-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vpl"))
-        .args(["table2", "--backend", "gpu", "--scene", "office", "--size", "64x36", "--frames", "2", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && !std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") && stderr.contains("adapter") {
-        eprintln!("skipped: {stderr}");
-        return;
-    }
-    assert!(out.status.success(), "{stderr}");
+    let args = ["table2", "--backend", "gpu", "--scene", "office", "--size", "64x36", "--frames", "2"];
+    let Some((_, dir)) = vpl_on_the_gpu("vpl-table2-gpu", &args) else { return };
     let md = std::fs::read_to_string(dir.join("table2.md")).unwrap();
     assert!(md.contains("wholly on the device"), "{md}");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("table2.json")).unwrap()).unwrap();

@@ -85,9 +85,7 @@ fn bounce(@builtin(global_invocation_id) id: vec3<u32>) {
         n = -n;
         ng = -ng;
     }
-    let r = keyed_state(vec2<u32>(bp.key_lo, bp.key_hi), org.y);
-    rng_state = r.xy;
-    rng_inc = r.zw;
+    seed_stream(org.y, vec2<u32>(bp.key_lo, bp.key_hi));
     let u = next_f32();
     let v = next_f32();
     let d = to_world(n, cosine_hemisphere(u, v));

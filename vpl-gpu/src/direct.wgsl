@@ -32,9 +32,7 @@ fn direct(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pos = d_pos[i];
     if ((dparams.flags & 2u) != 0u && pos.w > 0.0) {
-        let r = keyed_state(dparams.key, i);
-        rng_state = r.xy;
-        rng_inc = r.zw;
+        seed_stream(i, dparams.key);
         let n = d_normal[i].xyz;
         let ng = d_ng[i].xyz;
         let s = max(dparams.samples, 1u);

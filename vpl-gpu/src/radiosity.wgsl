@@ -244,9 +244,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let k_job = id.x + id.y * params.row;
     if (k_job >= params.jobs * params.paths) { return; }
     let job = k_job / params.paths;
-    let r = keyed_state(rng_key[job], k_job - job * params.paths);
-    rng_state = r.xy;
-    rng_inc = r.zw;
+    seed_stream(k_job - job * params.paths, rng_key[job]);
     let a = jobs[3u * job];
     var p = a.xyz;
     var material = bitcast<u32>(a.w);

@@ -64,6 +64,13 @@ fn keyed_state(key: vec2<u32>, index: u32) -> vec4<u32> {
 var<private> rng_state: vec2<u32>;
 var<private> rng_inc: vec2<u32>;
 
+// Starts this invocation's draws at stream `index` under `key`.
+fn seed_stream(index: u32, key: vec2<u32>) {
+    let r = keyed_state(key, index);
+    rng_state = r.xy;
+    rng_inc = r.zw;
+}
+
 fn next_u32() -> u32 {
     let s = rng_state;
     // 6364136223846793005 = 0x5851F42D_4C957F2D
@@ -135,9 +142,7 @@ struct CameraRay {
 // focus distance; and the raster (width, height, lens radius (0: a pinhole), -).
 // Leaves the stream after the ray's four draws.
 fn camera_ray_of(origin: vec4<f32>, forward: vec4<f32>, right: vec4<f32>, up: vec4<f32>, raster: vec4<f32>, key: vec2<u32>, j: u32) -> CameraRay {
-    let r = keyed_state(key, j);
-    rng_state = r.xy;
-    rng_inc = r.zw;
+    seed_stream(j, key);
     let w = raster.x;
     let h = raster.y;
     let u = next_f32();

@@ -236,7 +236,7 @@ impl GpuSmcSampler {
         let ctx = gpu.ctx();
         let kernels = Kernels::new(ctx);
         let s = shape;
-        let it = uniform(ctx, "smc iteration", &It::zeroed_default());
+        let it = uniform(ctx, "smc iteration", &<It as bytemuck::Zeroable>::zeroed());
         // The counters, and the indirect dispatch sizes `decide` writes.
         let state = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("smc state"),
@@ -543,12 +543,6 @@ impl GpuSmcSampler {
             self.timings = SmcTimings { total_ms: self.ms, ..SmcTimings::default() };
         }
         Ok(&self.set)
-    }
-}
-
-impl It {
-    fn zeroed_default() -> It {
-        bytemuck::Zeroable::zeroed()
     }
 }
 

@@ -142,12 +142,6 @@ fn intensity_of(l: vec3<f32>, p: f32) -> f32 {
     return max(v, 0.0);
 }
 
-fn seed_stream(index: u32, key: vec2<u32>) {
-    let r = keyed_state(key, index);
-    rng_state = r.xy;
-    rng_inc = r.zw;
-}
-
 // RngStream::below: Lemire's multiply-shift.
 fn below(n: u32) -> u32 {
     return mul_wide(next_u32(), n).y;

@@ -2,6 +2,7 @@
 
 use crate::flux::{AreaProbes, FluxEstimator, ProbeWindow, flux_param};
 use crate::placement::Placement;
+use crate::relight::Relight;
 use vpl_core::{Budget, ParamError, ParamKey, Params};
 use vpl_density::rendering_k;
 
@@ -47,6 +48,13 @@ pub struct SmcConfig {
     pub probe_window: ProbeWindow,
     /// Where in its Voronoi cell a VPL shines from ([`Placement`]).
     pub placement: Placement,
+    /// How the cells' mean radiances follow moving lights ([`Relight`]).
+    pub relight: Relight,
+    /// Paths of each candidate's relighting estimate ([`Relight::Candidates`]).
+    pub relight_paths: u32,
+    /// Bounces after the candidate in those paths (0: its direct light);
+    /// `None`: the radiosity paths' (`radiosity_bounces`).
+    pub relight_bounces: Option<u32>,
 }
 
 impl Default for SmcConfig {
@@ -68,6 +76,9 @@ impl Default for SmcConfig {
             probes_per_vpl: 4,
             probe_window: ProbeWindow::default(),
             placement: Placement::default(),
+            relight: Relight::default(),
+            relight_paths: 1,
+            relight_bounces: None,
         }
     }
 }
@@ -97,6 +108,12 @@ impl SmcConfig {
             .saturating_mul(AreaProbes::BYTES_PER_PROBE)
     }
 
+    /// Bounces of the candidates' relighting paths: the configured ones or
+    /// the radiosity paths'.
+    pub fn relight_bounces(&self) -> u32 {
+        self.relight_bounces.unwrap_or(self.radiosity_bounces)
+    }
+
     /// Area probes kept per iteration.
     pub fn probes_per_iteration(&self) -> usize {
         self.vpls.saturating_mul(self.probes_per_vpl)
@@ -121,6 +138,9 @@ impl SmcConfig {
         }
         if self.probe_iterations == 0 {
             return Err(SmcError::Invalid("the area probes need at least 1 iteration"));
+        }
+        if self.relight_paths == 0 {
+            return Err(SmcError::Invalid("relighting needs at least 1 path"));
         }
         if self.probes_per_vpl == 0 {
             return Err(SmcError::Invalid("the area probes need at least 1 probe per VPL"));
@@ -177,6 +197,17 @@ impl SmcConfig {
             default: "site",
             about: "where a VPL shines from in its Voronoi cell: site (its own point, the paper's) or centroid (the cell's probe nearest its centroid)",
         },
+        ParamKey {
+            key: "relight",
+            default: "ratio",
+            about: "how the cells' radiances follow moving lights: ratio (by the VPL's change), candidates (by the change of the candidates' short estimates) or none",
+        },
+        ParamKey { key: "relight-paths", default: "1", about: "paths of each candidate's relighting estimate" },
+        ParamKey {
+            key: "relight-bounces",
+            default: "the radiosity paths'",
+            about: "bounces after the candidate in those paths (0: its direct light alone)",
+        },
     ];
 
     /// The settings of `budget` (I and the radiosity paths' bounces,
@@ -209,6 +240,12 @@ impl SmcConfig {
             probes_per_vpl: p.count_or("probes-per-vpl", d.probes_per_vpl, 1)?,
             probe_window: p.get_or("probe-window", d.probe_window)?,
             placement: p.get_or("placement", d.placement)?,
+            relight: p.get_or("relight", d.relight)?,
+            relight_paths: p.count_or("relight-paths", d.relight_paths, 1)?,
+            relight_bounces: match p.get::<u32>("relight-bounces")? {
+                Some(b) => Some(p.count_or("relight-bounces", b, 0)?),
+                None => None,
+            },
         })
     }
 }

@@ -159,7 +159,7 @@ use std::collections::{HashSet, VecDeque};
 use vpl_core::ParamError;
 use vpl_core::glam::{DVec3, Vec3};
 use vpl_core::params::FromParam;
-use vpl_core::{Ray, RayCaster, Scene};
+use vpl_core::{Ray, RayCaster, Scene, SurfacePoint};
 use vpl_density::KnnDensity;
 
 /// How the sampler turns a VPL's radiance L(y) into flux Φ = L(y) · A(y).
@@ -275,6 +275,9 @@ struct Probe {
     /// The radiance's weight in its cell's mean: the area of its hit over
     /// the hit's share of the resampling draws (see [`AreaProbes::push`]).
     weight: f32,
+    /// A candidate's relighting estimates (D(t), D(now))
+    /// ([`crate::Relight::Candidates`]).
+    track: Option<(Vec3, Vec3)>,
     owner: Owner,
 }
 
@@ -315,6 +318,23 @@ pub struct ProbeCandidate {
     pub draws: f32,
     /// Its id.
     pub id: u64,
+    /// Its point, and its short relighting estimate D(t) under this
+    /// iteration's lights ([`crate::Relight::Candidates`]; `None`: the
+    /// candidate is not relit).
+    pub track: Option<(SurfacePoint, Vec3)>,
+}
+
+/// Estimates a radiance for each (point, id) pair, with random numbers
+/// keyed by the id ([`AreaProbes::relight`]).
+pub type Track<'a> = dyn FnMut(&[(SurfacePoint, u64)]) -> Vec<Vec3> + 'a;
+
+/// A candidate held for relighting: its probe in its batch, its id (which
+/// keys its estimates' random numbers) and its point.
+#[derive(Clone, Copy, Debug)]
+struct Tracked {
+    probe: u32,
+    id: u64,
+    y: SurfacePoint,
 }
 
 /// One iteration's candidate-ray hits for [`AreaProbes::push`].
@@ -365,6 +385,11 @@ pub struct Cell {
     /// The luminance of the cell's VPL under the newest iteration's lights,
     /// if recorded ([`AreaProbes::record`]).
     pub luminance_now: Option<f32>,
+    /// Σ w D(t) over the cell's relit candidates: their relighting
+    /// estimates under the lights of their iterations.
+    pub track_then: Vec3,
+    /// Σ w D(now) over the same candidates.
+    pub track_now: Vec3,
 }
 
 impl Cell {
@@ -392,6 +417,19 @@ impl Cell {
             }
             _ => mean,
         }
+    }
+
+    /// [`Cell::mean_radiance`] brought to the lights of now by the change
+    /// of its candidates' relighting estimates, (Σ w D(now) − Σ w D(t)) / Σ w
+    /// (eq. 1 of [`crate::Relight`]'s module), held at zero or above; the
+    /// mean itself where no candidate has a weight.
+    pub fn relit_radiance(&self, fallback: Vec3) -> Vec3 {
+        let mean = self.mean_radiance(fallback);
+        if self.radiance_weight <= 0.0 {
+            return mean;
+        }
+        let l = mean + (self.track_now - self.track_then) / self.radiance_weight;
+        if l.is_finite() { l.max(Vec3::ZERO) } else { mean }
     }
 
     /// The cell's mean radiance over area: the candidates' radiances
@@ -483,6 +521,8 @@ pub struct AreaProbes {
     /// estimated it under that iteration's lights, by slot (with its id):
     /// what [`Cell::current_radiance`] brings the cells' radiances forward with.
     records: VecDeque<Option<Record>>,
+    /// Per iteration held, its candidates that are relit ([`AreaProbes::relight`]).
+    tracked: VecDeque<Vec<Tracked>>,
 }
 
 /// The luminance of each slot's VPL (with its id) under one iteration's lights.
@@ -528,6 +568,7 @@ impl AreaProbes {
             newest: Vec::new(),
             window: ProbeWindow::default(),
             records: VecDeque::new(),
+            tracked: VecDeque::new(),
         }
     }
 
@@ -564,6 +605,7 @@ impl AreaProbes {
         self.trees.clear();
         self.known.clear();
         self.records.clear();
+        self.tracked.clear();
     }
 
     /// Iterations held.
@@ -599,11 +641,13 @@ impl AreaProbes {
         let mut radiance = vec![None; n];
         let mut drawn = vec![0.0f32; n];
         let mut ids = vec![None; n];
+        let mut tracks = vec![None; n];
         for c in candidates {
             if c.hit < n {
                 radiance[c.hit] = c.radiance.is_finite().then_some(c.radiance);
                 drawn[c.hit] = if c.draws.is_finite() && c.draws > 0.0 { c.draws } else { 0.0 };
                 ids[c.hit] = Some(c.id);
+                tracks[c.hit] = c.track.filter(|(_, d)| d.is_finite());
             }
         }
         let stride = n.div_ceil(self.per_iteration).max(1);
@@ -636,6 +680,7 @@ impl AreaProbes {
                     area: if stands { area } else { 0.0 },
                     radiance,
                     weight: if radiance.is_some() && weight.is_finite() { weight } else { 0.0 },
+                    track: tracks[h].filter(|_| radiance.is_some()).map(|(_, d)| (d, d)),
                     owner: if stands || radiance.is_some() { Owner::Unassigned } else { Owner::Nobody },
                 }
             })
@@ -658,12 +703,23 @@ impl AreaProbes {
             .filter(|&(_, t)| batch[t as usize].radiance.is_some())
             .collect();
         self.newest.sort_unstable();
+        let tracked: Vec<Tracked> = kept
+            .iter()
+            .enumerate()
+            .filter_map(|(t, &h)| {
+                let (y, _) = tracks[h]?;
+                batch[t].track?;
+                Some(Tracked { probe: t as u32, id: ids[h]?, y })
+            })
+            .collect();
         if self.batches.len() == self.depth {
             self.batches.pop_front();
             self.draw_scales.pop_front();
             self.trees.pop_front();
             self.records.pop_front();
+            self.tracked.pop_front();
         }
+        self.tracked.push_back(tracked);
         self.batches.push_back(batch);
         self.records.push_back(None);
         self.draw_scales.push_back(draw_scale);
@@ -701,6 +757,34 @@ impl AreaProbes {
         if let Some(q) = self.batches.back_mut().and_then(|b| b.get_mut(t)) {
             q.radiance = Some(l);
         }
+    }
+
+    /// Estimates anew the relighting estimate D(now) of every candidate
+    /// held but those of the newest iteration ([`crate::Relight::Candidates`]):
+    /// `track` estimates each (point, id) with the random numbers its id
+    /// keys. Each cell's mean radiance is then brought forward by its
+    /// candidates' Σ w D(now) / Σ w D(t) ([`Cell::relit_radiance`]).
+    /// Returns the estimates made.
+    pub fn relight(&mut self, track: &mut Track) -> usize {
+        let older = self.tracked.len().saturating_sub(1);
+        let jobs: Vec<(SurfacePoint, u64)> = self.tracked.iter().take(older).flatten().map(|k| (k.y, k.id)).collect();
+        if jobs.is_empty() {
+            return 0;
+        }
+        let now = track(&jobs);
+        if now.len() != jobs.len() {
+            return 0;
+        }
+        let mut now = now.into_iter();
+        for (batch, tracked) in self.batches.iter_mut().zip(&self.tracked).take(older) {
+            for k in tracked {
+                let d_now = now.next().unwrap_or(Vec3::NAN);
+                if let Some(Some((d_then, d))) = batch.get_mut(k.probe as usize).map(|q| q.track.as_mut()) {
+                    *d = if d_now.is_finite() { d_now } else { *d_then };
+                }
+            }
+        }
+        jobs.len()
     }
 
     /// Records the radiance of each VPL of the set, `(slot, id, L)`, under
@@ -1046,6 +1130,10 @@ impl AreaProbes {
                             c.history_luminance += wf * q.weight * y;
                             c.history_weight += wf * q.weight;
                         }
+                        if let Some((d_then, d_now)) = q.track {
+                            c.track_then += wf * q.weight * d_then;
+                            c.track_now += wf * q.weight * d_now;
+                        }
                     }
                 }
                 cells
@@ -1063,6 +1151,8 @@ impl AreaProbes {
                 c.radiance_weight += b.radiance_weight;
                 c.history_luminance += b.history_luminance;
                 c.history_weight += b.history_weight;
+                c.track_then += b.track_then;
+                c.track_now += b.track_now;
             }
         }
         Some(
@@ -1077,6 +1167,28 @@ impl AreaProbes {
                 })
                 .collect(),
         )
+    }
+
+    /// Every cell cut into its probes: each probe that stands for area, at
+    /// its point and shading normal, with its share of its cell's flux,
+    /// `weight · area · radiance[i]` (`radiance[i]` the radiance site `i`'s
+    /// cell carries), so the pieces of a cell sum to `|V_i| · radiance[i]`.
+    /// Each piece is (its site's index, point, shading normal, flux); a set
+    /// of them renders the cells' light spread as the probes spread it,
+    /// with no point standing for a whole cell.
+    pub fn pieces(&self, sites: &[Site], radiance: &[Vec3]) -> Vec<(usize, Vec3, Vec3, Vec3)> {
+        let live = Live::new(sites);
+        let mut out = Vec::new();
+        for (batch, w) in self.batches.iter().zip(self.weights()) {
+            for q in batch {
+                let Some(i) = live.get(q.owner) else { continue };
+                let Some(&l) = radiance.get(i) else { continue };
+                if q.area > 0.0 {
+                    out.push((i, q.p, q.ns, l * (w as f32 * q.area)));
+                }
+            }
+        }
+        out
     }
 
     /// For each site, the probe of its cell on its own smooth surface
@@ -1213,8 +1325,10 @@ mod tests {
     fn push_weighted(a: &mut AreaProbes, hits: &[Vec3], normals: &[Vec3], candidates: &[(usize, Vec3, f32)]) {
         let tree = KnnDensity::new(hits).unwrap();
         let nearest = tree.member_nearest();
-        let candidates: Vec<ProbeCandidate> =
-            candidates.iter().map(|&(hit, radiance, draws)| ProbeCandidate { hit, radiance, draws, id: 100 + hit as u64 }).collect();
+        let candidates: Vec<ProbeCandidate> = candidates
+            .iter()
+            .map(|&(hit, radiance, draws)| ProbeCandidate { hit, radiance, draws, id: 100 + hit as u64, track: None })
+            .collect();
         a.push(ProbeHits { hits, normals, shading: normals, tree, nearest: &nearest, candidates: &candidates, draw_scale: 1.0 });
     }
 
@@ -1241,6 +1355,59 @@ mod tests {
         a.renew(7, Vec3::splat(100.0));
         let mean = a.cells(&s).unwrap()[0].mean_radiance(Vec3::ZERO);
         assert!((mean - Vec3::splat((1.0 + 3.0 * 9.0) / 4.0)).abs().max_element() < 1e-5, "{mean}");
+    }
+
+    /// Relighting estimates D(now) anew for the candidates of the older
+    /// iterations (the newest's stay at D(t)), and a cell's mean moves by
+    /// its candidates' weighted change, held at zero or above.
+    #[test]
+    fn relighting_moves_each_cell_by_the_change_of_its_candidates_estimates() {
+        let scene = floor(false);
+        let s = sites(&[Vec3::new(0.15, 0.0, 0.1), Vec3::new(0.9, 0.0, 0.9)]);
+        let point = |p: Vec3| SurfacePoint { p, ng: Vec3::Y, n: Vec3::Y, triangle: 0, material: 0 };
+        let mut a = AreaProbes::new(2);
+        let hits = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(0.2, 0.0, 0.1), Vec3::new(0.9, 0.0, 0.9)];
+        let tracked = |hit: usize, l: f32, d: f32, id: u64| ProbeCandidate {
+            hit,
+            radiance: Vec3::splat(l),
+            draws: 1.0,
+            id,
+            track: Some((point(hits[hit]), Vec3::splat(d))),
+        };
+        let push = |a: &mut AreaProbes, candidates: &[ProbeCandidate]| {
+            let tree = KnnDensity::new(&hits).unwrap();
+            let nearest = tree.member_nearest();
+            let normals = [Vec3::Y; 3];
+            a.push(ProbeHits { hits: &hits, normals: &normals, shading: &normals, tree, nearest: &nearest, candidates, draw_scale: 1.0 });
+        };
+        // The older iteration: candidates 1 (L 2, D 1) and 2 (L 4, D 3) in
+        // the first cell, 3 (L 8, D 6) in the second; the newer: candidate
+        // 4 (L 10, D 5) in the first.
+        push(&mut a, &[tracked(0, 2.0, 1.0, 1), tracked(1, 4.0, 3.0, 2), tracked(2, 8.0, 6.0, 3)]);
+        push(&mut a, &[tracked(0, 10.0, 5.0, 4)]);
+        a.assign(&scene, &CpuRays, &s);
+        let before = a.cells(&s).unwrap();
+        assert_eq!(before[0].relit_radiance(Vec3::ZERO), before[0].mean_radiance(Vec3::ZERO));
+        // D now: candidate 1 gains 3, candidate 2 loses 1, candidate 3 loses 20.
+        let mut asked = Vec::new();
+        let made = a.relight(&mut |jobs| {
+            asked.extend(jobs.iter().map(|&(y, id)| (y.p, id)));
+            jobs.iter().map(|&(_, id)| Vec3::splat([4.0, 2.0, -14.0][id as usize - 1])).collect()
+        });
+        assert_eq!(made, 3);
+        assert_eq!(asked, vec![(hits[0], 1), (hits[1], 2), (hits[2], 3)]);
+        let cells = a.cells(&s).unwrap();
+        // The first cell's three candidates weigh alike (hits 0.1 from their
+        // nearest, iterations of equal weight): its mean (2 + 4 + 10) / 3
+        // moves by (3 − 1 + 0) / 3, to 6.
+        let c = cells[0];
+        assert!((c.mean_radiance(Vec3::ZERO) - Vec3::splat(16.0 / 3.0)).abs().max_element() < 1e-5);
+        assert!((c.relit_radiance(Vec3::ZERO) - Vec3::splat(6.0)).abs().max_element() < 1e-5, "{}", c.relit_radiance(Vec3::ZERO));
+        // The second cell's mean would fall below zero: it is held at zero.
+        assert_eq!(cells[1].relit_radiance(Vec3::ZERO), Vec3::ZERO);
+        // An estimator that answers short changes nothing.
+        assert_eq!(a.relight(&mut |_| Vec::new()), 0);
+        assert_eq!(a.cells(&s).unwrap(), cells);
     }
 
     /// The triangle window weighs the iterations 1, 2, …, 2, 1 (summing

@@ -38,7 +38,9 @@
 //! [`Placement::Centroid`] from the probe of its cell nearest the cell's
 //! centroid (a VPL at the edge of its cell is a quadrature point off
 //! centre, which leaves the Munich blocks 6 % too bright; derivation and
-//! measurements in [`Placement`]'s module).
+//! measurements in [`Placement`]'s module). Under moving lights the cells'
+//! mean radiances, measured over T iterations, are brought to the lights
+//! of now ([`Relight`]).
 //!
 //! One departure from the paper: a VPL's flux uses a second radiosity
 //! estimate, seeded apart from the one its selection used (made once when
@@ -90,14 +92,16 @@ mod config;
 mod flux;
 mod placement;
 mod points;
+mod relight;
 mod sampler;
 
 pub use config::{SmcConfig, SmcError};
-pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, surface_neighbour_sq};
+pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, Track, surface_neighbour_sq};
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};
 pub use points::{
     CameraPoint, CandidateHit, camera_points, camera_points_of, camera_sees, candidate_hits, candidate_hits_from, first_passing,
     mutual_ray, mutually_visible, resolve,
 };
+pub use relight::Relight;
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};
 pub use vpl_core::resample::{Resampled, resample, resample_counted};

@@ -1,9 +1,10 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::flux::{AreaProbes, FluxEstimator, ProbeCandidate, ProbeHits, Site};
+use crate::flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points_of, camera_sees, candidate_hits_from, mutual_ray, resolve};
+use crate::relight::Relight;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -115,6 +116,8 @@ pub struct SmcStats {
     /// The light the candidates of the cells carry, by luminance
     /// ([`AreaProbes::candidate_light`]; 0 without probes).
     pub candidate_light: f64,
+    /// Candidates brought to the lights of now ([`Relight::Candidates`]).
+    pub relit_candidates: usize,
 }
 
 impl SmcStats {
@@ -154,6 +157,8 @@ impl SmcTimings {
 pub struct SmcSampler {
     config: SmcConfig,
     estimator: Estimator,
+    /// The candidates' short relighting estimates ([`Relight::Candidates`]).
+    tracker: Estimator,
     rays: Arc<dyn RayCaster>,
     particles: Vec<Option<Particle>>,
     set: VplSet,
@@ -205,7 +210,11 @@ impl SmcSampler {
     /// when that is `None`): what a backend (a GPU) hands over.
     pub fn with_services(config: SmcConfig, services: &Services) -> Result<SmcSampler, SmcError> {
         let mut s = match &services.radiosity {
-            Some(make) => SmcSampler::with_estimator(config, make.estimator(config.radiosity_paths, config.radiosity_bounces))?,
+            Some(make) => {
+                let mut s = SmcSampler::with_estimator(config, make.estimator(config.radiosity_paths, config.radiosity_bounces))?;
+                s.tracker = make.estimator(config.relight_paths, config.relight_bounces());
+                s
+            }
             None => SmcSampler::new(config)?,
         };
         s.rays = services.rays.clone();
@@ -218,6 +227,7 @@ impl SmcSampler {
         Ok(SmcSampler {
             config,
             estimator,
+            tracker: Box::new(PathRadiosity { paths: config.relight_paths, max_bounces: config.relight_bounces() }),
             rays: Arc::new(CpuRays),
             particles: vec![None; config.vpls],
             set: VplSet::new(config.vpls),
@@ -296,6 +306,12 @@ impl SmcSampler {
     /// the VPL's life, so it costs no temporal coherence.
     fn render_seed(seed: u64, id: u64) -> u64 {
         mix64(seed ^ mix64(id.wrapping_add(0x5EC0_0002)).rotate_left(17))
+    }
+
+    /// The seed of candidate `id`'s relighting estimates: the same at every
+    /// iteration, so that their differences are quiet ([`Relight::Candidates`]).
+    fn relight_seed(seed: u64, id: u64) -> u64 {
+        mix64(seed ^ mix64(id.wrapping_add(0x5EC0_0003)).rotate_left(29))
     }
 
     /// One iteration of Algorithm 1 (lines 3–19) for `camera` over `scene`,
@@ -469,19 +485,31 @@ impl SmcSampler {
 
         // The hits become area probes, the candidates among them with their radiance.
         if c.probes() && self.collect_probes {
+            // Each candidate's relighting estimate under this iteration's lights.
+            let t0 = Instant::now();
+            let tracks: Vec<Option<(SurfacePoint, Vec3)>> = if c.relight == Relight::Candidates {
+                let jobs: Vec<(SurfacePoint, u64)> =
+                    chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::relight_seed(seed, first_id + i as u64))).collect();
+                let d = self.tracker.radiosity_many(scene, &jobs);
+                jobs.iter().zip(d).map(|(&(y, _), d)| Some((y, d))).collect()
+            } else {
+                vec![None; chosen.len()]
+            };
+            tm.radiosity_ms += ms(t0);
             let t0 = Instant::now();
             // Each candidate's first landings over its draw probability: with
             // its hit's area, its weight in its cell's mean radiance.
             let sampled: Vec<ProbeCandidate> = chosen
                 .iter()
                 .zip(drawn.first.iter().zip(&drawn.probability))
-                .zip(&radiances)
+                .zip(radiances.iter().zip(tracks))
                 .enumerate()
-                .map(|(i, ((&h, (&c, &p)), &l))| ProbeCandidate {
+                .map(|(i, ((&h, (&c, &p)), (&l, track)))| ProbeCandidate {
                     hit: h,
                     radiance: l,
                     draws: (c as f64 / p) as f32,
                     id: first_id + i as u64,
+                    track,
                 })
                 .collect();
             let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
@@ -604,6 +632,14 @@ impl SmcSampler {
                 }
             }
             self.lighting = Some(key);
+            // The candidates held, estimated under earlier lights, brought to these.
+            if st.relit && self.config.relight == Relight::Candidates && self.config.probes() {
+                let tracker = &self.tracker;
+                st.relit_candidates = self.probes.relight(&mut |jobs: &[(SurfacePoint, u64)]| {
+                    let jobs: Vec<(SurfacePoint, u64)> = jobs.iter().map(|&(y, id)| (y, Self::relight_seed(seed, id))).collect();
+                    tracker.radiosity_many(scene, &jobs)
+                });
+            }
         } else {
             let jobs: Vec<(SurfacePoint, u64)> =
                 added.iter().filter_map(|&s| self.particles[s].map(|p| (p.y, Self::render_seed(seed, p.id)))).collect();
@@ -633,6 +669,44 @@ impl SmcSampler {
         }
         tm.knn_ms += ms(t0);
         slots.len()
+    }
+
+    /// The last frame's cells cut into their probes, each a VPL with its
+    /// share of its cell's flux ([`AreaProbes::pieces`]): the light the
+    /// default flux gives each VPL, spread over its cell. Empty without
+    /// measured cells.
+    pub fn cell_pieces(&self) -> Vec<Vpl> {
+        let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
+        let sites: Vec<Site> =
+            slots.iter().filter_map(|&s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng })).collect();
+        let Some(cells) = self.probes.cells(&sites) else { return Vec::new() };
+        let radiance: Vec<Vec3> = slots
+            .iter()
+            .zip(&cells)
+            .filter_map(|(&s, c)| {
+                self.particles[s].map(|p| match self.config.relight {
+                    Relight::Ratio => c.current_radiance(p.radiance),
+                    Relight::Candidates => c.relit_radiance(p.radiance),
+                    Relight::None => c.mean_radiance(p.radiance),
+                })
+            })
+            .collect();
+        self.probes
+            .pieces(&sites, &radiance)
+            .into_iter()
+            .enumerate()
+            .map(|(k, (_, y, n, flux))| Vpl { y, n, flux, id: k as u64, bounce: 0 })
+            .collect()
+    }
+
+    /// The probes of the last frame's cells: point, shading normal and the
+    /// area each stands for (weighted over the iterations held).
+    pub fn cell_areas(&self) -> Vec<(usize, Vec3, Vec3, f32)> {
+        let sites: Vec<Site> = (0..self.config.vpls)
+            .filter_map(|s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng }))
+            .collect();
+        let ones = vec![Vec3::ONE; sites.len()];
+        self.probes.pieces(&sites, &ones).into_iter().map(|(i, p, n, a)| (i, p, n, a.x)).collect()
     }
 
     /// The output: flux Φ (eq. 5 and the flux convention of vpl-core) as
@@ -670,8 +744,14 @@ impl SmcSampler {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
-                let by_cell: Vec<Vec3> =
-                    slots.iter().zip(&cells).map(|(&s, c)| c.current_radiance(particle(s).radiance) * c.area as f32).collect();
+                // Each cell's mean radiance under the lights of now ([`Relight`]).
+                let relight = self.config.relight;
+                let cell_radiance = |s: usize, c: &Cell| match relight {
+                    Relight::Ratio => c.current_radiance(particle(s).radiance),
+                    Relight::Candidates => c.relit_radiance(particle(s).radiance),
+                    Relight::None => c.mean_radiance(particle(s).radiance),
+                };
+                let by_cell: Vec<Vec3> = slots.iter().zip(&cells).map(|(&s, c)| cell_radiance(s, c) * c.area as f32).collect();
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiSite => {

@@ -1,0 +1,116 @@
+//! Where SMC's cell flux loses or gains light, at one frame of a scene.
+//!
+//! ```text
+//! cargo run --release -p vpl-bench --example cell_pieces -- SCENE FRAME SEED [HOLD] [KEY=VALUE ...]
+//! ```
+//!
+//! The default SMC (settings changed by the KEY=VALUE pairs, as `--set`)
+//! is stepped along the scene's sequence as `vpl energy` steps it (every
+//! 8th frame, then each of the 32 before FRAME), and then HOLD more times
+//! at FRAME itself (the lights standing still). At FRAME, 32×24 pixels,
+//! unclamped, ray-traced, exhaustive, indirect only, it prints over the
+//! path tracer's image mean (1,024 paths a pixel, through the centres):
+//!
+//! - `sites`: the VPLs as the sampler gives them;
+//! - `pieces`: every cell cut into its probes, each with its share of the
+//!   cell's flux (`SmcSampler::cell_pieces`): no point stands for a cell;
+//! - `own`: the same probes with the cells' areas, each with its own
+//!   radiance now (64 paths): what the areas alone give;
+//! - `cell means`: each cell's mean of those radiances, spread over it.
+//!
+//! `sites` against `pieces` is the error of a point standing for its cell;
+//! `pieces` against `cell means` the error of the cells' mean radiances
+//! (their lag under moving lights among it); `own` against 1 the error of
+//! the areas.
+use rayon::prelude::*;
+use vpl_core::glam::Vec3;
+use vpl_core::image::luminance;
+use vpl_core::{
+    Budget, Frame, Image, IndirectShader as _, MaterialPolicy, Mode, Params, RadiosityEstimator as _, Ray, SceneSetup, Vpl, VplSampler,
+    VplSet, VplVisibility as _,
+};
+use vpl_pathtrace::{Footprint, PathRadiosity, PathTracer, track_with};
+use vpl_sampling::{SmcConfig, SmcSampler};
+use vpl_shading::{ExhaustiveShader, render_gbuffer};
+use vpl_visibility::RayTraced;
+
+fn mean(img: &Image) -> f64 {
+    img.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.data.len().max(1) as f64
+}
+
+fn set_of(vpls: Vec<Vpl>) -> VplSet {
+    let mut set = VplSet::new(vpls.len());
+    for (k, v) in vpls.into_iter().enumerate() {
+        set.set(k, Some(v));
+    }
+    set
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let usage = "usage: cell_pieces SCENE FRAME SEED [HOLD] [KEY=VALUE ...]";
+    let (Some(scene_name), Some(target), Some(seed)) = (args.first(), args.get(1), args.get(2)) else { return Err(usage.into()) };
+    let (target, seed): (u32, u64) = (target.parse()?, seed.parse()?);
+    let hold: usize = args.get(3).filter(|a| !a.contains('=')).map_or(Ok(0), |a| a.parse())?;
+    let params = Params::parse(args.iter().skip(3).filter(|a| a.contains('=')))?;
+    let config = SmcConfig::from_params(&Budget::new(2048, 5), &params)?;
+    let (w, h) = (32, 24);
+    let setup = SceneSetup::load(scene_name)?;
+    let mut smc = SmcSampler::new(config)?;
+    let mut steps: Vec<u32> = (0..=target).step_by(8).collect();
+    steps.extend(target.saturating_sub(32)..=target);
+    steps.sort_unstable();
+    steps.dedup();
+    steps.extend(std::iter::repeat_n(target, hold));
+    for &f in &steps {
+        let (scene, camera) = setup.frame(f)?;
+        let camera = camera.with_resolution((w, h))?;
+        let gbuffer = render_gbuffer(&scene, &camera);
+        let time = setup.sequence.as_ref().map_or(0.0, |q| q.time(f));
+        smc.next_frame(&Frame { scene: &scene, camera: &camera, time, index: f as u64, seed, gbuffer: &gbuffer, previous: None });
+    }
+    let (scene, camera) = setup.frame(target)?;
+    let camera = camera.with_resolution((w, h))?;
+    let gbuffer = render_gbuffer(&scene, &camera);
+    let shade = |set: &VplSet| {
+        let mut vis = RayTraced::default();
+        vis.update(&scene, set);
+        mean(&ExhaustiveShader { clamp: None }.shade(&gbuffer, set, &vis))
+    };
+    let sites = shade(smc.vpls());
+    let pieces = shade(&set_of(smc.cell_pieces()));
+    // The probes' own radiances now, and each cell's mean of them.
+    let areas = smc.cell_areas();
+    let estimator = PathRadiosity { paths: 64, max_bounces: 2 };
+    let own_l: Vec<Vec3> = areas
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(_, p, n, _))| match scene.intersect(&Ray::new(p + n * 1e-3, -n)) {
+            Some(hit) => estimator.radiosity(&scene, &hit.point.facing(n), 0x5eed ^ k as u64),
+            None => Vec3::ZERO,
+        })
+        .collect();
+    let vpl = |k: usize, y: Vec3, n: Vec3, flux: Vec3| Vpl { y, n, flux, id: k as u64, bounce: 0 };
+    let own = areas.iter().zip(&own_l).enumerate().map(|(k, (&(_, p, n, a), &l))| vpl(k, p, n, l * a)).collect();
+    let cells = areas.iter().map(|a| a.0 + 1).max().unwrap_or(0);
+    let (mut light, mut area) = (vec![Vec3::ZERO; cells], vec![0.0f32; cells]);
+    for (&(i, _, _, a), &l) in areas.iter().zip(&own_l) {
+        light[i] += l * a;
+        area[i] += a;
+    }
+    let means = areas.iter().enumerate().map(|(k, &(i, p, n, a))| vpl(k, p, n, light[i] / area[i] * a)).collect();
+    let (own, means) = (shade(&set_of(own)), shade(&set_of(means)));
+    let diffuse = scene.with_material_policy(MaterialPolicy::Diffuse);
+    let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
+    let tracked = track_with(&diffuse, &camera, &PathTracer::new(5, Mode::Indirect), &pixels, 1024, 0, target as u64, Footprint::Centre);
+    let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
+    println!(
+        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes)",
+        sites / truth,
+        pieces / truth,
+        own / truth,
+        means / truth,
+        areas.len()
+    );
+    Ok(())
+}

@@ -18,6 +18,8 @@
 //!   radiance now (64 paths): what the areas alone give;
 //! - `cell means`: each cell's mean of those radiances, spread over it.
 //!
+//! and the median time of SMC's step over the last 32 frames.
+//!
 //! `sites` against `pieces` is the error of a point standing for its cell;
 //! `pieces` against `cell means` the error of the cells' mean radiances
 //! (their lag under moving lights among it); `own` against 1 the error of
@@ -62,13 +64,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     steps.sort_unstable();
     steps.dedup();
     steps.extend(std::iter::repeat_n(target, hold));
+    let mut step_ms = Vec::new();
     for &f in &steps {
         let (scene, camera) = setup.frame(f)?;
         let camera = camera.with_resolution((w, h))?;
         let gbuffer = render_gbuffer(&scene, &camera);
         let time = setup.sequence.as_ref().map_or(0.0, |q| q.time(f));
         smc.next_frame(&Frame { scene: &scene, camera: &camera, time, index: f as u64, seed, gbuffer: &gbuffer, previous: None });
+        step_ms.push((smc.timings().total_ms, smc.timings().radiosity_ms));
     }
+    // The steps of the last 32 frames: their median time, radiosity apart.
+    let last = &mut step_ms[steps.len().saturating_sub(32)..];
+    last.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (step, radiosity) = last.get(last.len() / 2).copied().unwrap_or_default();
     let (scene, camera) = setup.frame(target)?;
     let camera = camera.with_resolution((w, h))?;
     let gbuffer = render_gbuffer(&scene, &camera);
@@ -78,7 +86,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mean(&ExhaustiveShader { clamp: None }.shade(&gbuffer, set, &vis))
     };
     let sites = shade(smc.vpls());
-    let pieces = shade(&set_of(smc.cell_pieces()));
+    let cut = smc.cell_pieces();
+    let total = |v: &[Vpl]| v.iter().map(|v| luminance(v.flux) as f64).sum::<f64>();
+    let pieces_light = total(&cut);
+    let pieces = shade(&set_of(cut));
     // The probes' own radiances now, and each cell's mean of them.
     let areas = smc.cell_areas();
     let estimator = PathRadiosity { paths: 64, max_bounces: 2 };
@@ -91,7 +102,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     let vpl = |k: usize, y: Vec3, n: Vec3, flux: Vec3| Vpl { y, n, flux, id: k as u64, bounce: 0 };
-    let own = areas.iter().zip(&own_l).enumerate().map(|(k, (&(_, p, n, a), &l))| vpl(k, p, n, l * a)).collect();
+    let own: Vec<Vpl> = areas.iter().zip(&own_l).enumerate().map(|(k, (&(_, p, n, a), &l))| vpl(k, p, n, l * a)).collect();
+    let own_light = total(&own);
     let cells = areas.iter().map(|a| a.0 + 1).max().unwrap_or(0);
     let (mut light, mut area) = (vec![Vec3::ZERO; cells], vec![0.0f32; cells]);
     for (&(i, _, _, a), &l) in areas.iter().zip(&own_l) {
@@ -105,12 +117,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tracked = track_with(&diffuse, &camera, &PathTracer::new(5, Mode::Indirect), &pixels, 1024, 0, target as u64, Footprint::Centre);
     let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
     println!(
-        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes)",
+        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances'); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
         sites / truth,
         pieces / truth,
         own / truth,
         means / truth,
-        areas.len()
+        areas.len(),
+        pieces_light / own_light
     );
     Ok(())
 }

@@ -199,8 +199,8 @@ impl SmcConfig {
         },
         ParamKey {
             key: "relight",
-            default: "ratio",
-            about: "how the cells' radiances follow moving lights: ratio (by the VPL's change), candidates (by the change of the candidates' short estimates) or none",
+            default: "candidates",
+            about: "how the cells' radiances follow moving lights: candidates (by the change of their candidates' short estimates), ratio (by their VPL's change) or none",
         },
         ParamKey { key: "relight-paths", default: "1", about: "paths of each candidate's relighting estimate" },
         ParamKey {

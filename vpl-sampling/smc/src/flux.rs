@@ -104,13 +104,14 @@
 //!   under moving lights L̄ lags by T/2 iterations on average, while the
 //!   VPL's own radiance is estimated anew at once, as the paper does, with
 //!   the same random numbers each frame. So the cell's mean is brought
-//!   forward by its VPL's own change over the same iterations and weights,
-//!   L̄ · Y_i(now) / Ȳ_i(then) ([`Cell::current_radiance`]; the records are
-//!   equal under lights that do not move, and it is L̄ itself). On
-//!   `building`, whose lamp is carried from room to room, this took the
-//!   checkpoints of the sequence from 1.07, 1.20 and 0.90 of path tracing
-//!   to 1.00, 1.17 and 1.04 (one seed): a VPL that joined within the
-//!   window has no record of the iterations before it, and keeps their lag.
+//!   to the lights of now ([`crate::Relight`]): by default each cell moves
+//!   by the change of its candidates' short radiance estimates under common
+//!   random numbers ([`Cell::relit_radiance`]), which took `building`'s
+//!   sequence, whose lamp is carried from room to room, from 1.063 to 1.022
+//!   of path tracing; scaling the mean by its VPL's own change,
+//!   L̄ · Y_i(now) / Ȳ_i(then) ([`Cell::current_radiance`]), gave 1.063
+//!   (a VPL that joined within the window has no record of the iterations
+//!   before it, and one point does not change as its cell does).
 //!   Σ Φ then
 //!   equals the candidates' light and an independent estimate of ∫ L dA
 //!   within their standard errors on every built-in scene and both real

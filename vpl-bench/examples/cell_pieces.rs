@@ -117,13 +117,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tracked = track_with(&diffuse, &camera, &PathTracer::new(5, Mode::Indirect), &pixels, 1024, 0, target as u64, Footprint::Centre);
     let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
     println!(
-        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances'); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
+        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances', the candidates' {:.3}); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
         sites / truth,
         pieces / truth,
         own / truth,
         means / truth,
         areas.len(),
-        pieces_light / own_light
+        pieces_light / own_light,
+        smc.stats().candidate_light / own_light
     );
     Ok(())
 }

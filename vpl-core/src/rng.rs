@@ -57,6 +57,8 @@ impl Purpose {
     pub const CONFIDENCE: Purpose = Purpose(21);
     /// Light samples of the check of what a camera sees (index = grid ray).
     pub const VIEW: Purpose = Purpose(22);
+    /// The point of its cell a VPL shines from (index = the VPL's id).
+    pub const PLACEMENT: Purpose = Purpose(23);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

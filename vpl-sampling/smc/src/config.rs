@@ -92,7 +92,7 @@ impl SmcConfig {
     /// Whether the sampler measures Voronoi cells with area probes: for the
     /// flux ([`FluxEstimator::probes`]) or for the placement.
     pub fn probes(&self) -> bool {
-        self.flux.probes() || self.placement == Placement::Centroid
+        self.flux.probes() || self.placement != Placement::Site
     }
 
     /// Bytes the sampler keeps beyond its VPLs: the area probes of the
@@ -195,7 +195,7 @@ impl SmcConfig {
         ParamKey {
             key: "placement",
             default: "site",
-            about: "where a VPL shines from in its Voronoi cell: site (its own point, the paper's) or centroid (the cell's probe nearest its centroid)",
+            about: "where a VPL shines from in its Voronoi cell: site (its own point, the paper's), centroid (the cell's probe nearest its centroid) or random (a probe of its cell drawn by area when it joins)",
         },
         ParamKey {
             key: "relight",

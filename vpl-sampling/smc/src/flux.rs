@@ -1192,6 +1192,43 @@ impl AreaProbes {
         out
     }
 
+    /// For each site whose `u[i]` is given (a uniform number in [0, 1)),
+    /// a probe of its cell drawn by the area it stands for (weighted over
+    /// the iterations held, as the cell's area is): its point and shading
+    /// normal; `None` where `u[i]` is `None` or the cell stands for no area.
+    /// The same answer on any thread count (one pass in batch order).
+    pub fn drawn_probes(&self, sites: &[Site], u: &[Option<f32>]) -> Vec<Option<(Vec3, Vec3)>> {
+        let live = Live::new(sites);
+        let weights = self.weights();
+        let mut total = vec![0.0f64; sites.len()];
+        for (batch, &w) in self.batches.iter().zip(&weights) {
+            for q in batch {
+                if let (Some(i), true) = (live.get(q.owner), q.area > 0.0) {
+                    total[i] += w * q.area as f64;
+                }
+            }
+        }
+        let mut left: Vec<Option<f64>> =
+            (0..sites.len()).map(|i| u.get(i).copied().flatten().filter(|_| total[i] > 0.0).map(|u| u as f64 * total[i])).collect();
+        let mut out = vec![None; sites.len()];
+        for (batch, &w) in self.batches.iter().zip(&weights) {
+            for q in batch {
+                let Some(i) = live.get(q.owner) else { continue };
+                let Some(l) = left[i].as_mut() else { continue };
+                if q.area <= 0.0 {
+                    continue;
+                }
+                // The last probe with area stands in for rounding short of the total.
+                out[i] = Some((q.p, q.ns));
+                *l -= w * q.area as f64;
+                if *l < 0.0 {
+                    left[i] = None;
+                }
+            }
+        }
+        out
+    }
+
     /// For each site, the probe of its cell on its own smooth surface
     /// (normals within 60°) nearest `targets[i]` (its position and shading
     /// normal), `None` for a cell without such probes that stand for area.
@@ -1409,6 +1446,46 @@ mod tests {
         // An estimator that answers short changes nothing.
         assert_eq!(a.relight(&mut |_| Vec::new()), 0);
         assert_eq!(a.cells(&s).unwrap(), cells);
+    }
+
+    /// A drawn probe lies in the site's own cell, and u walks the cell's
+    /// probes in order of their areas: the probe drawn at u is the one whose
+    /// running share of the cell's area first passes u, so a uniform u picks
+    /// each probe with the share of the area it stands for.
+    #[test]
+    fn a_drawn_probe_is_one_of_the_cell_by_its_share_of_the_area() {
+        let scene = floor(false);
+        let mut a = AreaProbes::new(2);
+        for k in 0..2 {
+            let hits = uniform(200, 5, k);
+            push(&mut a, &hits, &vec![Vec3::Y; hits.len()], &[]);
+        }
+        let s = sites(&[Vec3::new(0.25, 0.0, 0.5), Vec3::new(0.75, 0.0, 0.5)]);
+        a.assign(&scene, &CpuRays, &s);
+        let cells = a.cells(&s).unwrap();
+        // The probes of the first cell in batch order, with their weighted areas.
+        let weights = a.weights();
+        let own: Vec<(Vec3, f64)> = a
+            .batches
+            .iter()
+            .zip(&weights)
+            .flat_map(|(b, &w)| {
+                b.iter().filter(|q| q.owner == Owner::Vpl { id: 100, slot: 0 } && q.area > 0.0).map(move |q| (q.p, w * q.area as f64))
+            })
+            .collect();
+        let total: f64 = own.iter().map(|o| o.1).sum();
+        assert!((total - cells[0].area).abs() < 1e-9 * total.max(1.0));
+        for u in [0.0f32, 0.1, 0.37, 0.5, 0.8, 0.999] {
+            let drawn = a.drawn_probes(&s, &[Some(u), None]);
+            assert_eq!(drawn[1], None);
+            let (p, n) = drawn[0].expect("a probe");
+            assert_eq!(n, Vec3::Y);
+            // Its running share: the areas before it at most u, with it above.
+            let k = own.iter().position(|o| o.0 == p).expect("a probe of the first cell");
+            let before: f64 = own[..k].iter().map(|o| o.1).sum();
+            assert!(before <= u as f64 * total + 1e-9 && before + own[k].1 > u as f64 * total - 1e-9, "u {u}: {before} of {total}");
+            assert!(p.x < 0.5 + 1e-6, "{p}");
+        }
     }
 
     /// The triangle window weighs the iterations 1, 2, …, 2, 1 (summing

@@ -343,7 +343,7 @@ impl SmcSampler {
             }
         }
         let n = self.refresh_densities(scene, &mut tm);
-        self.write_fluxes(scene, n, &mut st, &mut tm);
+        self.write_fluxes(scene, seed, n, &mut st, &mut tm);
         self.iterations += 1;
         tm.total_ms = ms(start);
         self.stats = st;
@@ -714,7 +714,7 @@ impl SmcSampler {
     /// measured (and during the warm-up, whose flux nobody looks at) it is
     /// the paper's L / (n p). Each VPL shines from where the configured
     /// [`Placement`] puts it (the site until cells have been measured).
-    fn write_fluxes(&mut self, scene: &Scene, n: usize, st: &mut SmcStats, tm: &mut SmcTimings) {
+    fn write_fluxes(&mut self, scene: &Scene, seed: u64, n: usize, st: &mut SmcStats, tm: &mut SmcTimings) {
         let t0 = Instant::now();
         let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
         let particle = |s: usize| self.particles[s].expect("occupied");
@@ -780,6 +780,21 @@ impl SmcSampler {
                     // Moves for placement share M_max with the slots Algorithm 1 replaced.
                     let budget = self.config.m_max.saturating_sub(st.removed.max(st.added));
                     shown = placement::settle(choices, &self.shown, budget);
+                } else if self.config.placement == Placement::Random {
+                    // A VPL new to its slot draws its point from its cell; the others keep theirs.
+                    let kept = |s: usize| self.shown[s].filter(|at| at.id == particle(s).id);
+                    let u: Vec<Option<f32>> = slots
+                        .iter()
+                        .map(|&s| kept(s).is_none().then(|| stream(seed, 0, Purpose::PLACEMENT, particle(s).id).next_f32()))
+                        .collect();
+                    let drawn = self.probes.drawn_probes(&sites, &u);
+                    for (&s, d) in slots.iter().zip(drawn) {
+                        let p = particle(s);
+                        shown[s] = kept(s).or(Some(match d {
+                            Some((at, n)) => Shown { id: p.id, p: at, n },
+                            None => Shown { id: p.id, p: p.y.p, n: p.y.n },
+                        }));
+                    }
                 }
             }
         }
@@ -867,5 +882,45 @@ mod tests {
         assert_eq!(quantile(&[], 0.5), None);
         assert_eq!(coefficient_of_variation([2.0, 2.0, 2.0].into_iter()), 0.0);
         assert!((coefficient_of_variation([1.0, 3.0].into_iter()) - 2f32.sqrt() / 2.0).abs() < 1e-6);
+    }
+
+    /// With the random placement every VPL shines from a point it drew
+    /// when it joined and keeps it for its life: only replaced slots move,
+    /// at most M_max a frame, and the same run gives the same points.
+    #[test]
+    fn random_placement_keeps_each_vpls_point_for_its_life() {
+        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let camera = setup.camera.with_resolution((32, 32)).unwrap();
+        let gbuffer = vpl_core::GBuffer::empty();
+        let config = SmcConfig { vpls: 128, warmup: 8, placement: Placement::Random, ..SmcConfig::default() };
+        let run = || {
+            let mut smc = SmcSampler::new(config).unwrap();
+            let mut frames = Vec::new();
+            for index in 0..6 {
+                let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index, seed: 3, gbuffer: &gbuffer, previous: None };
+                let set = smc.next_frame(&frame);
+                frames.push((0..128).map(|s| set.get(s).map(|v| (v.id, v.y, v.n))).collect::<Vec<_>>());
+            }
+            frames
+        };
+        let frames = run();
+        assert_eq!(frames[0].iter().flatten().count(), 128);
+        // Some VPLs shine from another point than their particle's.
+        let mut smc = SmcSampler::new(config).unwrap();
+        let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index: 0, seed: 3, gbuffer: &gbuffer, previous: None };
+        let set = smc.next_frame(&frame).clone();
+        let elsewhere =
+            smc.particles().iter().enumerate().filter(|(s, p)| p.is_some_and(|p| set.get(*s).is_some_and(|v| v.y != p.y.p))).count();
+        assert!(elsewhere > 64, "{elsewhere} of 128 moved into their cells");
+        for pair in frames.windows(2) {
+            let moved = pair[0].iter().zip(&pair[1]).filter(|(a, b)| a != b).count();
+            assert!(moved <= config.m_max, "{moved} slots moved");
+            for (a, b) in pair[0].iter().zip(&pair[1]) {
+                if let (Some(a), Some(b)) = (a, b) {
+                    assert!(a.0 != b.0 || a == b, "VPL {} moved", a.0);
+                }
+            }
+        }
+        assert_eq!(run(), frames);
     }
 }

@@ -126,6 +126,23 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
     std::fs::remove_dir_all(&split).unwrap();
 }
 
+/// A run of SMC's variants alone (how a researcher compares estimators)
+/// has no other method for the target's table: its cells say so with a
+/// dash, not with a NaN.
+#[test]
+fn a_run_of_smc_variants_alone_compares_with_nothing() {
+    let reg = Registry::builtin();
+    let spec = Table1Spec { methods: vec!["smc".into(), "smc:placement=random".into()], seeds: 1, ..tiny() };
+    let dir = fresh("variants");
+    table1::run(&reg, &spec, &dir, Shard::ALL, &mut |_| {}).unwrap();
+    table1::merge(&dir).unwrap();
+    let md = read(&dir, "table1.md");
+    assert!(md.contains("SMC (placement=random)"), "{md}");
+    let target = md.split("## The target").nth(1).expect("the target's table");
+    assert!(!target.contains("NaN") && target.contains("| `maze` | "), "{target}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn specs_and_shards_are_checked() {
     let mut s = tiny();

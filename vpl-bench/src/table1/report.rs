@@ -193,14 +193,15 @@ pub fn markdown(r: &Table1Results) -> String {
             .iter()
             .filter(|m| m.method != "smc" && !super::is_smc_variant(&m.method))
             .min_by(|a, b| a.error.e_prime.total_cmp(&b.error.e_prime));
-        let (oname, ov) = other.map_or(("–".to_string(), f64::NAN), |o| (display_name(&o.method), o.error.e_prime));
+        // A run of SMC's variants alone has no other method to compare with.
+        let lowest = other.map_or("–".to_string(), |o| format!("{:.4} ({})", o.error.e_prime, display_name(&o.method)));
         let d_prime = other.and_then(|o| versus(&o.method)).map(|d| d.e_prime);
         let mir = find("mir-resample").map(|m| m.error.e);
         let d_e = versus("mir-resample").map(|d| d.e);
         let ci = |d: Option<Interval>| d.map_or("–".to_string(), |d| format!("[{:+.4}, {:+.4}]", d.lo, d.hi));
         let _ = writeln!(
             md,
-            "| `{}` | {:.4} | {ov:.4} ({oname}) | {} | {} | {:.4} | {} | {} | {} |",
+            "| `{}` | {:.4} | {lowest} | {} | {} | {:.4} | {} | {} | {} |",
             row.id,
             smc.error.e_prime,
             ci(d_prime),

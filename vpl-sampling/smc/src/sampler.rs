@@ -335,13 +335,6 @@ impl SmcSampler {
         let added = self.fill_slots(candidates, &xs, &mut st);
         tm.candidates_ms += ms(t0);
         self.refresh_radiosities(scene, seed, &added, &mut st, &mut tm);
-        // Each candidate that joined the set counts in its cell with its own
-        // second estimate, not with the one that chose it.
-        for &s in &added {
-            if let Some(p) = self.particles[s] {
-                self.probes.renew(p.id, p.radiance);
-            }
-        }
         let n = self.refresh_densities(scene, &mut tm);
         self.write_fluxes(scene, seed, n, &mut st, &mut tm);
         self.iterations += 1;

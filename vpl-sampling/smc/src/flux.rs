@@ -437,6 +437,17 @@ impl Cell {
         if l.is_finite() { l.max(Vec3::ZERO) } else { mean }
     }
 
+    /// The cell's mean radiance under the lights of now as `relight` brings
+    /// it there ([`Cell::current_radiance`], [`Cell::relit_radiance`] or
+    /// [`Cell::mean_radiance`]), `fallback` the cell's VPL's own radiance.
+    pub fn radiance(&self, relight: crate::Relight, fallback: Vec3) -> Vec3 {
+        match relight {
+            crate::Relight::Ratio => self.current_radiance(fallback),
+            crate::Relight::Candidates => self.relit_radiance(fallback),
+            crate::Relight::None => self.mean_radiance(fallback),
+        }
+    }
+
     /// The cell's mean radiance over area: the candidates' radiances
     /// weighted by their hits' areas over their shares of the draws (a
     /// ratio estimate; see the module text), their plain mean where none
@@ -743,8 +754,8 @@ impl AreaProbes {
     /// Estimates anew the relighting estimate D(now) of every candidate
     /// held but those of the newest iteration ([`crate::Relight::Candidates`]):
     /// `track` estimates each (point, id) with the random numbers its id
-    /// keys. Each cell's mean radiance is then brought forward by its
-    /// candidates' Σ w D(now) / Σ w D(t) ([`Cell::relit_radiance`]).
+    /// keys. Each cell's mean radiance then moves by its candidates'
+    /// (Σ w D(now) − Σ w D(t)) / Σ w ([`Cell::relit_radiance`]).
     /// Returns the estimates made.
     pub fn relight(&mut self, track: &mut Track) -> usize {
         let older = self.tracked.len().saturating_sub(1);
@@ -1174,22 +1185,19 @@ impl AreaProbes {
 
     /// For each site whose `u[i]` is given (a uniform number in [0, 1)),
     /// a probe of its cell drawn by the area it stands for (weighted over
-    /// the iterations held, as the cell's area is): its point and shading
-    /// normal; `None` where `u[i]` is `None` or the cell stands for no area.
-    /// The same answer on any thread count (one pass in batch order).
-    pub fn drawn_probes(&self, sites: &[Site], u: &[Option<f32>]) -> Vec<Option<(Vec3, Vec3)>> {
+    /// the iterations held, as the cell's area is; `cells` are the sites'
+    /// [`AreaProbes::cells`]): its point and shading normal; `None` where
+    /// `u[i]` is `None` or the cell stands for no area. The same answer on
+    /// any thread count (one pass in batch order).
+    pub fn drawn_probes(&self, sites: &[Site], cells: &[Cell], u: &[Option<f32>]) -> Vec<Option<(Vec3, Vec3)>> {
         let live = Live::new(sites);
         let weights = self.weights();
-        let mut total = vec![0.0f64; sites.len()];
-        for (batch, &w) in self.batches.iter().zip(&weights) {
-            for q in batch {
-                if let (Some(i), true) = (live.get(q.owner), q.area > 0.0) {
-                    total[i] += w * q.area as f64;
-                }
-            }
-        }
-        let mut left: Vec<Option<f64>> =
-            (0..sites.len()).map(|i| u.get(i).copied().flatten().filter(|_| total[i] > 0.0).map(|u| u as f64 * total[i])).collect();
+        let mut left: Vec<Option<f64>> = (0..sites.len())
+            .map(|i| {
+                let area = cells.get(i).map_or(0.0, |c| c.area);
+                u.get(i).copied().flatten().filter(|_| area > 0.0).map(|u| u as f64 * area)
+            })
+            .collect();
         let mut out = vec![None; sites.len()];
         for (batch, &w) in self.batches.iter().zip(&weights) {
             for q in batch {
@@ -1451,7 +1459,7 @@ mod tests {
         let total: f64 = own.iter().map(|o| o.1).sum();
         assert!((total - cells[0].area).abs() < 1e-9 * total.max(1.0));
         for u in [0.0f32, 0.1, 0.37, 0.5, 0.8, 0.999] {
-            let drawn = a.drawn_probes(&s, &[Some(u), None]);
+            let drawn = a.drawn_probes(&s, &cells, &[Some(u), None]);
             assert_eq!(drawn[1], None);
             let (p, n) = drawn[0].expect("a probe");
             assert_eq!(n, Vec3::Y);

@@ -1,7 +1,7 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, Site};
+use crate::flux::{AreaProbes, FluxEstimator, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points_of, camera_sees, candidate_hits_from, mutual_ray, resolve};
 use crate::relight::Relight;
@@ -664,26 +664,20 @@ impl SmcSampler {
         slots.len()
     }
 
+    /// The occupied slots and their particles as the cells see them.
+    fn sites(&self) -> (Vec<usize>, Vec<Site>) {
+        (0..self.config.vpls).filter_map(|s| self.particles[s].map(|p| (s, Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng }))).unzip()
+    }
+
     /// The last frame's cells cut into their probes, each a VPL with its
     /// share of its cell's flux ([`AreaProbes::pieces`]): the light the
     /// default flux gives each VPL, spread over its cell. Empty without
     /// measured cells.
     pub fn cell_pieces(&self) -> Vec<Vpl> {
-        let slots: Vec<usize> = (0..self.config.vpls).filter(|&s| self.particles[s].is_some()).collect();
-        let sites: Vec<Site> =
-            slots.iter().filter_map(|&s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng })).collect();
+        let (slots, sites) = self.sites();
         let Some(cells) = self.probes.cells(&sites) else { return Vec::new() };
-        let radiance: Vec<Vec3> = slots
-            .iter()
-            .zip(&cells)
-            .filter_map(|(&s, c)| {
-                self.particles[s].map(|p| match self.config.relight {
-                    Relight::Ratio => c.current_radiance(p.radiance),
-                    Relight::Candidates => c.relit_radiance(p.radiance),
-                    Relight::None => c.mean_radiance(p.radiance),
-                })
-            })
-            .collect();
+        let radiance: Vec<Vec3> =
+            slots.iter().zip(&cells).filter_map(|(&s, c)| self.particles[s].map(|p| c.radiance(self.config.relight, p.radiance))).collect();
         self.probes
             .pieces(&sites, &radiance)
             .into_iter()
@@ -695,9 +689,7 @@ impl SmcSampler {
     /// The probes of the last frame's cells: point, shading normal and the
     /// area each stands for (weighted over the iterations held).
     pub fn cell_areas(&self) -> Vec<(usize, Vec3, Vec3, f32)> {
-        let sites: Vec<Site> = (0..self.config.vpls)
-            .filter_map(|s| self.particles[s].map(|p| Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng }))
-            .collect();
+        let (_, sites) = self.sites();
         let ones = vec![Vec3::ONE; sites.len()];
         self.probes.pieces(&sites, &ones).into_iter().map(|(i, p, n, a)| (i, p, n, a.x)).collect()
     }
@@ -724,13 +716,8 @@ impl SmcSampler {
             self.probes.record(&record);
         }
         if self.config.probes() && !self.warming {
-            let sites: Vec<Site> = slots
-                .iter()
-                .map(|&s| {
-                    let p = particle(s);
-                    Site { id: p.id, slot: s as u32, p: p.y.p, n: p.y.ng }
-                })
-                .collect();
+            // The same occupied slots, in the same order, as `slots`.
+            let (_, sites) = self.sites();
             st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
             st.candidate_light = self.probes.candidate_light();
             if let Some(cells) = self.probes.cells(&sites) {
@@ -738,13 +725,8 @@ impl SmcSampler {
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
                 // Each cell's mean radiance under the lights of now ([`Relight`]).
-                let relight = self.config.relight;
-                let cell_radiance = |s: usize, c: &Cell| match relight {
-                    Relight::Ratio => c.current_radiance(particle(s).radiance),
-                    Relight::Candidates => c.relit_radiance(particle(s).radiance),
-                    Relight::None => c.mean_radiance(particle(s).radiance),
-                };
-                let by_cell: Vec<Vec3> = slots.iter().zip(&cells).map(|(&s, c)| cell_radiance(s, c) * c.area as f32).collect();
+                let by_cell: Vec<Vec3> =
+                    slots.iter().zip(&cells).map(|(&s, c)| c.radiance(self.config.relight, particle(s).radiance) * c.area as f32).collect();
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiSite => {
@@ -780,7 +762,7 @@ impl SmcSampler {
                         .iter()
                         .map(|&s| kept(s).is_none().then(|| stream(seed, 0, Purpose::PLACEMENT, particle(s).id).next_f32()))
                         .collect();
-                    let drawn = self.probes.drawn_probes(&sites, &u);
+                    let drawn = self.probes.drawn_probes(&sites, &cells, &u);
                     for (&s, d) in slots.iter().zip(drawn) {
                         let p = particle(s);
                         shown[s] = kept(s).or(Some(match d {

@@ -44,6 +44,7 @@ pub mod pipeline;
 pub mod plot;
 pub mod progressive;
 pub mod rays;
+pub mod scenes;
 pub mod smc_step;
 pub mod stages;
 pub mod table1;

@@ -3,7 +3,6 @@
 
 use super::*;
 use crate::rays::{RaySets, closest_rate, fan_rate, occluded_rate, side_by_side, timed_build};
-use crate::table1::rows::scenes_dir;
 
 /// BVH build time and memory, and M rays/s for primary and diffuse closest hits and shadow
 /// occlusion, on `cornell` (36 triangles), Dabrovic's Sponza (66K) and five Sponzas side by
@@ -30,12 +29,12 @@ pub(super) struct Args {
 /// The default scenes: `cornell` and, where its model is present, Sponza.
 fn default_scenes() -> Vec<String> {
     let mut s = vec!["cornell".to_string()];
-    let sponza = scenes_dir().join("sponza-dabrovic.toml");
-    let model = scenes_dir().join("../../shared/scenes/sponza-dabrovic");
-    if sponza.is_file() && model.is_dir() {
-        s.push(sponza.display().to_string());
-    } else {
-        eprintln!("bench-rays: Dabrovic's Sponza is not on this machine (../shared/scenes): cornell only");
+    match crate::scenes::locate("sponza-dabrovic.toml") {
+        Ok(sponza) => match crate::scenes::model_missing(&sponza) {
+            None => s.push(sponza.display().to_string()),
+            Some(why) => eprintln!("bench-rays: Dabrovic's Sponza: {why}; cornell only"),
+        },
+        Err(why) => eprintln!("bench-rays: {why}; cornell only"),
     }
     s
 }

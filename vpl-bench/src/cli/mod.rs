@@ -54,6 +54,10 @@ use vpl_sampling::Registry;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The folder of the scene files of the real-scene rows (`scenes/` of the repository); default:
+    /// VPL_SCENES, else the nearest scenes/ folder at or above the working folder or the executable.
+    #[arg(long = "scenes-dir", global = true, value_name = "DIR")]
+    scenes_dir: Option<PathBuf>,
 }
 
 /// Where the VPL stages run.
@@ -431,6 +435,11 @@ where
             return 2;
         }
     };
+    if let Some(dir) = cli.scenes_dir.as_ref().filter(|d| !d.is_dir()) {
+        eprintln!("vpl: error: --scenes-dir {}: not a folder", dir.display());
+        return 2;
+    }
+    crate::scenes::set_dir(cli.scenes_dir.clone());
     match dispatch(cli, registry) {
         Ok(()) => 0,
         Err(e) => {

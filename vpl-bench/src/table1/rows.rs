@@ -5,9 +5,8 @@
 //! paper's figures for them.
 
 use std::ops::Range;
-use std::path::PathBuf;
 use vpl_core::scene_file::LightKeySpec;
-use vpl_core::{CoreError, SceneFile, SceneSetup};
+use vpl_core::{CoreError, SceneSetup};
 
 /// A tracked pixel: a fixed position in the image (as a fraction of its
 /// width and height, so any image size maps it to the same place) and what
@@ -55,7 +54,7 @@ pub struct Row {
     pub id: &'static str,
     /// Scene name in tables: the built-in scene, or the scene file's stem.
     pub scene: &'static str,
-    /// The scene file (relative to [`scenes_dir`]) of a row on real
+    /// The scene file (found by [`crate::scenes::locate`]) of a row on real
     /// geometry; `None`: the built-in scene `scene`.
     pub file: Option<&'static str>,
     /// VPL budget I.
@@ -91,11 +90,6 @@ const COURTYARD_PIXELS: [TrackedSpec; 8] = [
 
 /// The moving sun: from low in the east through high south to the west over 24 s.
 const MOVING_SUN: [(f32, [f32; 3]); 3] = [(0.0, [0.75, -0.3, -0.6]), (12.0, [0.1, -0.55, -0.83]), (24.0, [-0.6, -0.42, -0.68])];
-
-/// The folder of the committed scene files (`scenes/` of the repository).
-pub fn scenes_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes")
-}
 
 /// The paper's dynamic Crytek Sponza row, which both `atrium` and `sponza` stand in for.
 const PAPER_SPONZA: PaperRow = PaperRow {
@@ -270,25 +264,21 @@ impl Row {
     /// Why this row cannot run here (its model is not where its scene file
     /// names it), or `None`.
     pub fn missing(&self) -> Option<String> {
-        let file = self.file?;
-        let path = scenes_dir().join(file);
-        let described = match SceneFile::read(&path) {
-            Ok(f) => f,
-            Err(e) => return Some(format!("{}: {e}", path.display())),
-        };
-        let obj = described.geometry.obj.or(described.geometry.gltf).or(described.geometry.mitsuba)?;
-        let model = scenes_dir().join(&obj);
-        (!model.is_file()).then(|| format!("its model {} is not there", model.display()))
+        match crate::scenes::locate(self.file?) {
+            Ok(path) => crate::scenes::model_missing(&path),
+            Err(why) => Some(why),
+        }
     }
 
     /// The scene with this row's animation: the built-in one (with the sun
     /// keys of a moving-sun row added) or the row's scene file.
     pub fn setup(&self) -> Result<SceneSetup, CoreError> {
         if let Some(file) = self.file {
-            if let Some(why) = self.missing() {
+            let path = crate::scenes::locate(file).map_err(|why| CoreError::Invalid(format!("sequence {}: {why}", self.id)))?;
+            if let Some(why) = crate::scenes::model_missing(&path) {
                 return Err(CoreError::Invalid(format!("sequence {}: {why}", self.id)));
             }
-            return SceneSetup::load(&scenes_dir().join(file).to_string_lossy());
+            return SceneSetup::load(&path.to_string_lossy());
         }
         let setup = SceneSetup::builtin(self.scene)?;
         if self.sun_keys.is_empty() {

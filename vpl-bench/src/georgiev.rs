@@ -103,7 +103,7 @@ fn spec(sampler: &str, s: &GeorgievSettings, clamp: GeometryClamp) -> PipelineSp
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: s.seed,
-        backend: BackendKind::Cpu,
+        backend: BackendKind::Cpu.name().into(),
     }
 }
 
@@ -144,7 +144,7 @@ fn run(
     let setup = SceneSetup::load(scene_name)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let clamp = GeometryClamp::for_view(s.vpls, &setup.scene, &camera);
-    let mut p = spec(sampler, s, clamp).build(&Registry::builtin(), &setup.scene)?;
+    let mut p = spec(sampler, s, clamp).build(&Registry::builtin(), &crate::pipeline::backends(), &setup.scene)?;
     let mut f = MethodFigures::default();
     let mut last = Image::new(s.size.0, s.size.1);
     for i in 0..s.warmup_frames + s.frames {

@@ -26,7 +26,7 @@ fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: u
         mode: Mode::Indirect,
         direct_samples: 1,
         seed: 3,
-        backend,
+        backend: backend.name().into(),
     }
 }
 
@@ -37,16 +37,18 @@ fn gpu_backend_renders_the_cpu_backends_frames() {
     let clamp = GeometryClamp::for_scene_area(vpls, setup.scene.surface_area());
     for (sampler, vis) in [("smc", VisibilitySpec::ShadowMaps(64)), ("ir", VisibilitySpec::RayTraced)] {
         let registry = Registry::builtin();
-        let mut gpu = match spec(sampler, BackendKind::Gpu, vis, vpls, clamp).build(&registry, &setup.scene) {
-            Ok(p) => p,
-            Err(e) if std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("VPL_REQUIRE_GPU=1 but {e}"),
-            Err(e) => {
-                eprintln!("skipped: {e}");
-                return;
-            }
-        };
+        let mut gpu =
+            match spec(sampler, BackendKind::Gpu, vis, vpls, clamp).build(&registry, &vpl_bench::pipeline::backends(), &setup.scene) {
+                Ok(p) => p,
+                Err(e) if std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("VPL_REQUIRE_GPU=1 but {e}"),
+                Err(e) => {
+                    eprintln!("skipped: {e}");
+                    return;
+                }
+            };
         eprintln!("adapter: {}", gpu.backend().device().unwrap());
-        let mut cpu = spec(sampler, BackendKind::Cpu, vis, vpls, clamp).build(&registry, &setup.scene).unwrap();
+        let mut cpu =
+            spec(sampler, BackendKind::Cpu, vis, vpls, clamp).build(&registry, &vpl_bench::pipeline::backends(), &setup.scene).unwrap();
         for f in 0..3u32 {
             let (scene, camera) = setup.frame(f * 10).unwrap();
             let camera = camera.with_resolution((96, 54)).unwrap();

@@ -113,7 +113,7 @@ fn bad_input_is_one_line_and_exit_code_2() {
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--visibility", "magic"], "magic");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--direct-samples", "0"], "direct-samples");
     fails(&d, &["--scene", "cornell", "--method", "vpl", "--clamp", "off", "--compensate", "2"], "--compensate");
-    fails(&d, &["--scene", "cornell", "--method", "vpl", "--clamp", "areas"], "'auto', 'area' or 'off'");
+    fails(&d, &["--scene", "cornell", "--method", "vpl", "--clamp", "areas"], "'auto', 'scene-area', 'off'");
     // A missing MTL is named in a warning line before the error.
     let o = vpl().args(["render", "--scene", &nomtl, "--out"]).arg(d.join("x.exr")).output().unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.mtl"));

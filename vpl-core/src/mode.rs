@@ -44,6 +44,17 @@ impl Mode {
 #[error("unknown mode '{0}' (full, direct, indirect)")]
 pub struct UnknownMode(pub String);
 
+impl std::fmt::Display for Mode {
+    /// The spelling [`Mode`]'s `FromStr` reads: `full`, `direct`, `indirect`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Mode::Full => "full",
+            Mode::Direct => "direct",
+            Mode::Indirect => "indirect",
+        })
+    }
+}
+
 impl std::str::FromStr for Mode {
     type Err = UnknownMode;
     fn from_str(s: &str) -> Result<Self, UnknownMode> {

@@ -197,6 +197,11 @@ impl Params {
         self
     }
 
+    /// Whether `key` was given ([`Params::insert`]), not merely offered.
+    pub fn is_given(&self, key: &str) -> bool {
+        self.entries.iter().any(|e| e.key == key && e.required)
+    }
+
     /// Whether `key` was given or offered.
     pub fn contains(&self, key: &str) -> bool {
         self.entries.iter().any(|e| e.key == key)

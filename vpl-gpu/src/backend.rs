@@ -34,6 +34,14 @@ pub fn backend() -> Result<GpuBackend, GpuError> {
     Ok(GpuBackend::new(Gpu::new()?))
 }
 
+/// Registers this backend as `gpu` ([`backend`]: the first adapter found),
+/// so that an application finds it by name ([`vpl_render::Backends`]).
+pub fn register(backends: &mut vpl_render::Backends) {
+    backends.register("gpu", "wgpu kernels: G-buffer, shadow maps or shadow rays, shading, filter, SMC's rays and radiosity", || {
+        Ok(Box::new(backend().map_err(err)?))
+    });
+}
+
 fn err(e: impl std::fmt::Display) -> RenderError {
     RenderError::backend("gpu", e)
 }

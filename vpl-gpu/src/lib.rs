@@ -112,7 +112,7 @@ mod scene;
 mod shadow_maps;
 mod smc;
 
-pub use backend::{GpuBackend, backend};
+pub use backend::{GpuBackend, backend, register};
 pub use context::{GpuContext, GpuError, Traffic};
 pub use device::Gpu;
 pub use filter::GpuCrossBilateral;

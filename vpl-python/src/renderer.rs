@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use std::sync::{Arc, Mutex};
 use vpl_render::vpl_core::{Budget, GeometryClamp, Params, Stat, VplSampler};
-use vpl_render::{Backend, Clamp, CpuBackend, FrameOutput, ReadBack, Registry, Renderer, ShadingSpec, VisibilitySpec};
+use vpl_render::{Backend, Backends, Clamp, FrameOutput, ReadBack, Registry, Renderer, ShadingSpec, VisibilitySpec};
 
 /// What the last frame left besides its image.
 struct Last {
@@ -38,14 +38,11 @@ pub struct PyRenderer {
     backend: String,
 }
 
+/// The clamp as vpl-render spells it (`auto`, `scene-area`, `off`), or
+/// G_max as a number.
 fn parse_clamp(value: &Bound<'_, PyAny>) -> PyResult<Clamp> {
     if let Ok(s) = value.cast::<PyString>() {
-        return match s.to_cow()?.as_ref() {
-            "auto" => Ok(Clamp::Auto),
-            "scene-area" => Ok(Clamp::SceneArea),
-            "off" => Ok(Clamp::Off),
-            other => Err(vpl_err(format!("unknown clamp '{other}' (auto, scene-area, off, or G_max as a number)"))),
-        };
+        return s.to_cow()?.parse::<Clamp>().map_err(vpl_err);
     }
     let g: f32 = value.extract().map_err(|_| vpl_err("clamp must be 'auto', 'scene-area', 'off' or G_max as a number"))?;
     if !(g.is_finite() && g > 0.0) {
@@ -61,14 +58,12 @@ fn host_or_read<'py>(py: Python<'py>, renderer: &Renderer, image: &vpl_render::v
 }
 
 fn backend_named(name: &str) -> PyResult<Box<dyn Backend>> {
-    match name {
-        "cpu" => Ok(Box::new(CpuBackend)),
-        #[cfg(feature = "gpu")]
-        "gpu" => Ok(Box::new(vpl_gpu::backend().map_err(vpl_err)?)),
-        #[cfg(not(feature = "gpu"))]
-        "gpu" => Err(vpl_err("this build of vpl has no GPU backend (built without the `gpu` feature)")),
-        other => Err(vpl_err(format!("unknown backend '{other}' (cpu, gpu)"))),
-    }
+    let mut backends = Backends::builtin();
+    #[cfg(feature = "gpu")]
+    vpl_gpu::register(&mut backends);
+    #[cfg(not(feature = "gpu"))]
+    backends.absent("gpu", "built without the `gpu` feature");
+    backends.instantiate(name).map_err(vpl_err)
 }
 
 /// A sampler parameter's value as the toolkit's `key=value` text.
@@ -110,20 +105,20 @@ impl PyRenderer {
         size: Option<(u32, u32)>,
         params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyRenderer> {
-        let visibility = match visibility {
-            "shadowmap" | "shadow-map" => {
+        // Spelled as vpl-render spells them; `shadow_map` and `filter` set
+        // what a bare `shadowmap` and `interleaved` leave to them.
+        let visibility = match visibility.parse::<VisibilitySpec>().map_err(vpl_err)? {
+            VisibilitySpec::ShadowMaps(_) if !visibility.contains(':') => {
                 if shadow_map == 0 {
                     return Err(vpl_err("shadow_map must be at least 1 texel"));
                 }
                 VisibilitySpec::ShadowMaps(shadow_map)
             }
-            "raytraced" | "ray-traced" | "rays" => VisibilitySpec::RayTraced,
-            other => return Err(vpl_err(format!("unknown visibility '{other}' (shadowmap, raytraced)"))),
+            v => v,
         };
-        let shading = match shading {
-            "interleaved" => ShadingSpec::Interleaved { filter },
-            "exhaustive" => ShadingSpec::Exhaustive,
-            other => return Err(vpl_err(format!("unknown shading '{other}' (interleaved, exhaustive)"))),
+        let shading = match shading.parse::<ShadingSpec>().map_err(vpl_err)? {
+            ShadingSpec::Interleaved { filter: true } => ShadingSpec::Interleaved { filter },
+            s => s,
         };
         let clamp = match clamp {
             Some(c) => parse_clamp(c)?,

@@ -12,6 +12,11 @@
 //!   frame;
 //! - [`Backend`], [`CpuBackend`]: where the G-buffer, visibility and shading
 //!   run, and the services (ray caster, radiosity estimators) samplers get;
+//!   [`Backends`]: backends by name, other crates' registered beside the CPU
+//!   (`vpl_gpu::register`);
+//! - [`PipelineSpec`]: one description of a renderer (sampler and
+//!   parameters, budget, stages, clamp, backend by name), one line of text
+//!   as its written form, what the command line, Python and experiments use;
 //! - [`render_frame`]: one frame from given stages, timed per stage;
 //! - [`sequence`]: frames of a scene's animation with tracked pixels, CSV;
 //! - [`metrics`] and [`compare`]: relMSE, RMSE, the SMC paper's |E| and |E′|,
@@ -59,21 +64,25 @@
 #![warn(missing_docs)]
 
 mod backend;
+mod backends;
 pub mod compare;
 pub mod compensation;
 mod error;
 mod frame;
 pub mod memory;
 pub mod metrics;
+mod pipeline;
 mod renderer;
 pub mod sequence;
 mod spec;
 
 pub use backend::{Backend, CpuBackend};
+pub use backends::{BackendEntry, BackendFactory, Backends};
 pub use compensation::Compensation;
 pub use error::RenderError;
 pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_cancellable_on, render_frame_on};
 pub use memory::MemoryEstimate;
+pub use pipeline::PipelineSpec;
 pub use renderer::{Renderer, RendererBuilder, SamplerChoice};
 pub use sequence::{SequenceFrame, default_tracked_pixels, run_sequence};
 pub use spec::{Clamp, ReadBack, ShadingSpec, VisibilitySpec};

@@ -1,5 +1,28 @@
-//! What the stages after sampling are: visibility, shading, clamp.
+//! What the stages after sampling are: visibility, shading, clamp. Each
+//! has one spelling, which `Display` prints and `FromStr` reads, shared by
+//! the command line, Python and the viewer:
+//!
+//! | value | spelling |
+//! | --- | --- |
+//! | [`VisibilitySpec`] | `raytrace`, `shadowmap` (128² texels), `shadowmap:N` |
+//! | [`ShadingSpec`] | `interleaved` (filtered), `interleaved-unfiltered`, `exhaustive` |
+//! | [`Clamp`] | `auto`, `scene-area`, `off`, or G_max as a positive number |
+//!
+//! ```
+//! use vpl_render::{Clamp, ShadingSpec, VisibilitySpec};
+//!
+//! assert_eq!("shadowmap:256".parse::<VisibilitySpec>().unwrap(), VisibilitySpec::ShadowMaps(256));
+//! assert_eq!(VisibilitySpec::default().to_string(), "shadowmap:128");
+//! assert_eq!("interleaved-unfiltered".parse::<ShadingSpec>().unwrap(), ShadingSpec::Interleaved { filter: false });
+//! assert_eq!("scene-area".parse::<Clamp>().unwrap(), Clamp::SceneArea);
+//! for c in ["auto", "scene-area", "off", "2.5"] {
+//!     assert_eq!(c.parse::<Clamp>().unwrap().to_string(), c);
+//! }
+//! assert!("-1".parse::<Clamp>().is_err());
+//! ```
 
+use std::fmt;
+use std::str::FromStr;
 use vpl_core::{Camera, GeometryClamp, Scene};
 
 /// VPL-to-pixel visibility.
@@ -15,6 +38,37 @@ impl Default for VisibilitySpec {
     /// Shadow maps of 128² texels, the SMC paper's.
     fn default() -> Self {
         VisibilitySpec::ShadowMaps(vpl_visibility::DEFAULT_RESOLUTION)
+    }
+}
+
+impl fmt::Display for VisibilitySpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            VisibilitySpec::RayTraced => f.write_str("raytrace"),
+            VisibilitySpec::ShadowMaps(res) => write!(f, "shadowmap:{res}"),
+        }
+    }
+}
+
+impl FromStr for VisibilitySpec {
+    type Err = String;
+    /// `raytrace`, `shadowmap` or `shadowmap:N` (N texels a side, at least
+    /// 1). `raytraced`, `ray-traced`, `rays` and `shadow-map` are read too,
+    /// as Python scripts wrote them.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (kind, res) = match s.split_once(':') {
+            Some((k, r)) => (k, Some(r)),
+            None => (s, None),
+        };
+        match (kind, res) {
+            ("raytrace" | "raytraced" | "ray-traced" | "rays", None) => Ok(VisibilitySpec::RayTraced),
+            ("shadowmap" | "shadow-map", None) => Ok(VisibilitySpec::default()),
+            ("shadowmap" | "shadow-map", Some(r)) => match r.parse::<u32>() {
+                Ok(n) if n >= 1 => Ok(VisibilitySpec::ShadowMaps(n)),
+                _ => Err(format!("visibility '{s}': the shadow maps' side must be a positive whole number of texels")),
+            },
+            _ => Err(format!("unknown visibility '{s}' (raytrace, shadowmap, shadowmap:N)")),
+        }
     }
 }
 
@@ -34,6 +88,28 @@ impl Default for ShadingSpec {
     /// Interleaved and filtered, as the SMC paper renders.
     fn default() -> Self {
         ShadingSpec::Interleaved { filter: true }
+    }
+}
+
+impl fmt::Display for ShadingSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ShadingSpec::Interleaved { filter: true } => "interleaved",
+            ShadingSpec::Interleaved { filter: false } => "interleaved-unfiltered",
+            ShadingSpec::Exhaustive => "exhaustive",
+        })
+    }
+}
+
+impl FromStr for ShadingSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "interleaved" => Ok(ShadingSpec::Interleaved { filter: true }),
+            "interleaved-unfiltered" => Ok(ShadingSpec::Interleaved { filter: false }),
+            "exhaustive" => Ok(ShadingSpec::Exhaustive),
+            _ => Err(format!("unknown shading '{s}' (interleaved, interleaved-unfiltered, exhaustive)")),
+        }
     }
 }
 
@@ -70,6 +146,34 @@ impl Clamp {
             Clamp::SceneArea => Some(Some(GeometryClamp::for_scene_area(vpls, scene.surface_area()))),
             Clamp::Off => Some(None),
             Clamp::Value(c) => Some(Some(c)),
+        }
+    }
+}
+
+impl fmt::Display for Clamp {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Clamp::Auto => f.write_str("auto"),
+            Clamp::SceneArea => f.write_str("scene-area"),
+            Clamp::Off => f.write_str("off"),
+            Clamp::Value(c) => write!(f, "{}", c.g_max),
+        }
+    }
+}
+
+impl FromStr for Clamp {
+    type Err = String;
+    /// `auto`, `scene-area`, `off` or G_max (a positive, finite number);
+    /// `area` is read as `scene-area`, as the command line spelled it.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Clamp::Auto),
+            "scene-area" | "area" => Ok(Clamp::SceneArea),
+            "off" => Ok(Clamp::Off),
+            _ => match s.parse::<f32>() {
+                Ok(g) if g.is_finite() && g > 0.0 => Ok(Clamp::Value(GeometryClamp::new(g))),
+                _ => Err(format!("clamp '{s}' must be 'auto', 'scene-area', 'off' or G_max as a positive number")),
+            },
         }
     }
 }

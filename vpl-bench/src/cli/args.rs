@@ -65,56 +65,6 @@ impl FromStr for PixelArg {
     }
 }
 
-/// `--clamp <value | auto | area | off>`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ClampArg {
-    /// No clamping.
-    Off,
-    /// The default rule G_max = I / A_view ([`vpl_core::GeometryClamp::for_view`]).
-    Auto,
-    /// G_max = I / A with A the scene's surface area ([`vpl_core::GeometryClamp::for_scene_area`]).
-    Area,
-    /// Clamp the geometry term at this value (1/m²).
-    Value(f32),
-}
-
-impl ClampArg {
-    /// The clamp for a budget of `vpls` VPLs in `scene` seen by `camera`
-    /// (the renderer's rules, [`vpl_render::Clamp::resolve`]).
-    pub fn resolve(self, vpls: usize, scene: &vpl_core::Scene, camera: &vpl_core::Camera) -> Option<vpl_core::GeometryClamp> {
-        self.rule().resolve(vpls, scene, camera)
-    }
-
-    /// The renderer's rule for this flag.
-    pub fn rule(self) -> vpl_render::Clamp {
-        match self {
-            ClampArg::Off => vpl_render::Clamp::Off,
-            ClampArg::Auto => vpl_render::Clamp::Auto,
-            ClampArg::Area => vpl_render::Clamp::SceneArea,
-            ClampArg::Value(v) => vpl_render::Clamp::Value(vpl_core::GeometryClamp::new(v)),
-        }
-    }
-}
-
-impl FromStr for ClampArg {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        if s == "off" {
-            return Ok(ClampArg::Off);
-        }
-        if s == "auto" {
-            return Ok(ClampArg::Auto);
-        }
-        if s == "area" {
-            return Ok(ClampArg::Area);
-        }
-        match s.parse::<f32>() {
-            Ok(v) if v.is_finite() && v > 0.0 => Ok(ClampArg::Value(v)),
-            _ => Err(format!("clamp '{s}' must be a positive number, 'auto', 'area' or 'off'")),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,16 +74,21 @@ mod tests {
         assert_eq!("320x240".parse::<Size>().unwrap(), Size(320, 240));
         assert!("0x10".parse::<Size>().is_err());
         assert!("10".parse::<Size>().is_err());
-        assert_eq!("off".parse::<ClampArg>().unwrap(), ClampArg::Off);
-        assert_eq!("2.5".parse::<ClampArg>().unwrap(), ClampArg::Value(2.5));
+        // `--clamp` is the renderer's rule, spelled as vpl-render spells it.
+        use vpl_render::Clamp;
+        assert_eq!("off".parse::<Clamp>().unwrap(), Clamp::Off);
+        assert_eq!("2.5".parse::<Clamp>().unwrap(), Clamp::Value(vpl_core::GeometryClamp::new(2.5)));
         let setup = vpl_core::SceneSetup::load("cornell").unwrap();
         let (scene, camera) = (&setup.scene, &setup.camera);
-        let area = "area".parse::<ClampArg>().unwrap().resolve(100, scene, camera).unwrap();
-        assert_eq!(area.g_max, 100.0 / scene.surface_area());
-        let view = "auto".parse::<ClampArg>().unwrap().resolve(100, scene, camera).unwrap();
+        // `area`, the flag's first spelling, still reads as `scene-area`.
+        for area in ["area", "scene-area"] {
+            let c = area.parse::<Clamp>().unwrap().resolve(100, scene, camera).unwrap();
+            assert_eq!(c.g_max, 100.0 / scene.surface_area());
+        }
+        let view = "auto".parse::<Clamp>().unwrap().resolve(100, scene, camera).unwrap();
         assert_eq!(view, vpl_core::GeometryClamp::for_view(100, scene, camera));
-        assert!("areas".parse::<ClampArg>().is_err());
-        assert!("-1".parse::<ClampArg>().is_err());
+        assert!("areas".parse::<Clamp>().is_err());
+        assert!("-1".parse::<Clamp>().is_err());
         assert_eq!("3,4".parse::<PixelArg>().unwrap(), PixelArg(3, 4));
         assert!("3".parse::<PixelArg>().is_err());
     }

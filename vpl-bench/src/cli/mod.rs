@@ -35,8 +35,9 @@ mod track;
 mod validate_cornell;
 mod view;
 
-pub use args::{ClampArg, FramesArg, MemoryArg, PixelArg, Size};
+pub use args::{FramesArg, MemoryArg, PixelArg, Size};
 use output::{ImageOut, OutDir, Written, check_finite, distinct};
+use vpl_render::Clamp;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -134,13 +135,14 @@ struct SceneArgs {
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
     /// Geometry-term clamp: a value in 1/m², `auto` (G_max = I / A_view, A_view the area the camera's
-    /// points cover, with I from --vpls), `area` (G_max = I / the scene's surface area) or `off`.
+    /// points cover, with I from --vpls), `scene-area` (G_max = I / the scene's surface area; `area`
+    /// is read as that too) or `off`.
     /// Default: off for --method path, auto for --method vpl and progressive. The path tracer clamps
     /// the segment leaving the primary hit (§5.4 of the SMC paper), VPL shading the VPL-to-pixel
     /// segment, the progressive renderer the eye-vertex-to-VPL segment (its bound of G, §8 of
     /// Dammertz et al.).
     #[arg(long, allow_hyphen_values = true)]
-    clamp: Option<ClampArg>,
+    clamp: Option<Clamp>,
     /// VPL budget I (--method vpl; also sets the `auto` clamp).
     #[arg(long, default_value_t = 2048)]
     vpls: usize,
@@ -584,13 +586,13 @@ fn check_depth(max_depth: u32, vpls: usize) -> Res<()> {
 fn tracer(
     max_depth: u32,
     mode: ModeArg,
-    clamp: Option<ClampArg>,
+    clamp: Option<Clamp>,
     vpls: usize,
     scene: &vpl_core::Scene,
     camera: &vpl_core::Camera,
 ) -> PathTracer {
     let mut pt = PathTracer::new(max_depth, mode_of(mode));
-    pt.clamp = clamp.unwrap_or(ClampArg::Off).resolve(vpls, scene, camera);
+    pt.clamp = clamp.unwrap_or(Clamp::Off).resolve(vpls, scene, camera);
     pt
 }
 
@@ -666,7 +668,7 @@ fn pipeline_spec(
         mode: mode_of(mode),
         direct_samples: v.direct_samples,
         seed,
-        backend: v.backend.backend(),
+        backend: v.backend.backend().name().into(),
     })
 }
 
@@ -755,7 +757,7 @@ fn sampling_line(sampler: &str, e: &vpl_sampling::SamplingError) -> String {
 
 /// A renderer for `spec` on frames of `scene`, or one line that names what is wrong.
 fn build_renderer(spec: &crate::pipeline::PipelineSpec, registry: &Registry, scene: &vpl_core::Scene) -> Res<vpl_render::Renderer> {
-    spec.build(registry, scene).map_err(|e| match e {
+    spec.build(registry, &crate::pipeline::backends(), scene).map_err(|e| match e {
         vpl_render::RenderError::Sampling(e) => sampling_line(&spec.sampler, &e),
         e => crate::pipeline::backend_line(e),
     })

@@ -194,7 +194,7 @@ fn render_vpl(
     seed: u64,
     max_depth: u32,
     mode: ModeArg,
-    clamp: Option<ClampArg>,
+    clamp: Option<vpl_render::Clamp>,
     vpls: usize,
     v: &VplArgs,
     out: &ImageOut,
@@ -207,7 +207,7 @@ fn render_vpl(
     let (sc, camera) = load_frame(scene, frame, size)?;
     let sc = with_policy(sc, vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)");
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
-    let clamp = clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera);
+    let clamp = clamp.unwrap_or(vpl_render::Clamp::Auto).resolve(vpls, &sc, &camera);
     let spec = pipeline_spec(v, vpls, max_depth, mode, clamp.into(), seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;
@@ -273,7 +273,7 @@ fn render_progressive(
     size: Option<Size>,
     seed: u64,
     max_depth: u32,
-    clamp: Option<ClampArg>,
+    clamp: Option<vpl_render::Clamp>,
     vpls: usize,
     p: &ProgressiveArgs,
     out: &ImageOut,
@@ -334,7 +334,7 @@ fn render_progressive(
         vpl_paths: p.vpl_paths,
         caustic_paths: p.caustic_paths,
         culling,
-        clamp: clamp.unwrap_or(ClampArg::Auto).resolve(vpls, &sc, &camera),
+        clamp: clamp.unwrap_or(vpl_render::Clamp::Auto).resolve(vpls, &sc, &camera),
         projection_maps: !p.no_projection_maps,
         indirect_caustics: !p.primary_caustics_only,
         spectral: !p.no_spectral,

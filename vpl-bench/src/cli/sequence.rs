@@ -81,7 +81,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         eprintln!("vpl: warning: frame {}: {w}", range.start);
     }
     // The clamp's rule goes to the renderer: the view rule follows the camera.
-    let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp.unwrap_or(ClampArg::Auto).rule(), seed)?;
+    let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp.unwrap_or(vpl_render::Clamp::Auto), seed)?;
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &setup.scene)?;

@@ -613,7 +613,7 @@ pub fn pipeline_spec(spec: &Table1Spec, method: &str, vpls: usize, seed: u64) ->
         mode: Mode::Indirect,
         direct_samples: 1,
         seed,
-        backend: spec.backend,
+        backend: spec.backend.name().into(),
     })
 }
 
@@ -628,8 +628,9 @@ fn run_method(
 ) -> Result<MethodUnit, Table1Error> {
     let start = Instant::now();
     let setup = row.setup()?;
-    let mut renderer =
-        pipeline_spec(spec, method, row.vpls, seed)?.build(registry, &setup.scene).map_err(|e| Table1Error::Invalid(e.to_string()))?;
+    let mut renderer = pipeline_spec(spec, method, row.vpls, seed)?
+        .build(registry, &crate::pipeline::backends(), &setup.scene)
+        .map_err(|e| Table1Error::Invalid(e.to_string()))?;
     renderer.backend().check_size(spec.size).map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut k = 0u64;
     let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut renderer, &row.pixels(spec.size), None, &mut |_, _| {
@@ -900,8 +901,8 @@ mod tests {
         let p = pipeline_spec(&spec, "smc:flux=voronoi-site", 64, 0).unwrap();
         assert_eq!(p.sampler, "smc");
         let scene = vpl_core::SceneSetup::load("cornell").unwrap().scene;
-        assert!(p.build(&Registry::builtin(), &scene).is_ok());
+        assert!(p.build(&Registry::builtin(), &crate::pipeline::backends(), &scene).is_ok());
         let bad = pipeline_spec(&spec, "ir:flux=knn", 64, 0).unwrap();
-        assert!(bad.build(&Registry::builtin(), &scene).is_err());
+        assert!(bad.build(&Registry::builtin(), &crate::pipeline::backends(), &scene).is_err());
     }
 }

@@ -1,7 +1,7 @@
 //! The toolkit's own samplers as registry entries: each reads its settings
 //! from the parameters with its crate's `from_params`.
 
-use crate::registry::{SamplerContext, SamplerEntry, SamplingError};
+use crate::registry::{MemoryPart, SamplerContext, SamplerEntry, SamplingError};
 use vpl_core::{Budget, ParamError, Params, VplSampler};
 use vpl_ir::{InstantRadiosity, IrConfig};
 use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
@@ -96,13 +96,32 @@ fn smc_settings(budget: &Budget, p: &Params, paper: bool) -> Result<SmcConfig, P
     Ok(config)
 }
 
-/// The settings the built-in entry `name` (`smc` or `smc-knn`) gives its
-/// SMC sampler for `budget` and `p`; `None` for any other name.
-pub fn smc_config(name: &str, budget: &Budget, p: &Params) -> Option<Result<SmcConfig, ParamError>> {
-    match name {
-        "smc" => Some(smc_settings(budget, p, false)),
-        "smc-knn" => Some(smc_settings(budget, p, true)),
-        _ => None,
+/// The area probes of the SMC entry's settings (`paper`: `smc-knn`'s),
+/// where it keeps any ([`SmcConfig::probe_memory`]).
+fn smc_memory(paper: bool) -> impl Fn(&Budget, &Params) -> Vec<MemoryPart> + Send + Sync {
+    move |budget, p| {
+        let Ok(c) = smc_settings(budget, p, paper) else { return Vec::new() };
+        match c.probe_memory() {
+            0 => Vec::new(),
+            bytes => vec![MemoryPart {
+                what: format!("SMC area probes: {} VPLs × {} hits × {} iterations", c.vpls, c.resample_ratio, c.probe_iterations),
+                bytes,
+                keys: &["vpls", "resample-ratio"],
+            }],
+        }
+    }
+}
+
+/// The camera samples that `camera-samples` asks of RR, MIR and TCAS: one
+/// importon each, cast every frame.
+fn camera_memory(_: &Budget, p: &Params) -> Vec<MemoryPart> {
+    match p.get_or("camera-samples", 0u64).unwrap_or(0) {
+        0 => Vec::new(),
+        n => vec![MemoryPart {
+            what: format!("camera samples: {n} importons"),
+            bytes: n.saturating_mul(std::mem::size_of::<vpl_core::importons::Importon>() as u64),
+            keys: &["camera-samples"],
+        }],
     }
 }
 
@@ -125,13 +144,15 @@ pub(crate) fn entries() -> Vec<SamplerEntry> {
             "Russian-roulette acceptance (Georgiev & Slusallek 2010): candidates (IR's by default) kept in proportion to the light they bring the camera",
             rr,
         )
-        .with_keys(&rr_keys),
+        .with_keys(&rr_keys)
+        .with_memory(camera_memory),
         SamplerEntry::new(
             "mir",
             "Metropolis Instant Radiosity (Segovia et al. 2007): light paths by Metropolis-Hastings, VPLs of equal power to the camera",
             mir,
         )
-        .with_keys(MirConfig::KEYS),
+        .with_keys(MirConfig::KEYS)
+        .with_memory(camera_memory),
         SamplerEntry::new(
             "mir-resample",
             "MIR as the SMC paper ran it: 256·I path-tracer camera paths resampled to I VPLs by the light they bring the camera",
@@ -143,15 +164,18 @@ pub(crate) fn entries() -> Vec<SamplerEntry> {
             "Temporally coherent adaptive sampling (Barák et al. 2013): Metropolis chains over reflective shadow maps, one bounce",
             tcas,
         )
-        .with_keys(TcasConfig::KEYS),
+        .with_keys(TcasConfig::KEYS)
+        .with_memory(camera_memory),
         SamplerEntry::new(
             "smc",
             "Sequential Monte Carlo Instant Radiosity (Hedman et al. 2017): temporally coherent VPLs on indirectly visible surfaces",
             smc,
         )
-        .with_keys(SmcConfig::KEYS),
+        .with_keys(SmcConfig::KEYS)
+        .with_memory(smc_memory(false)),
         SamplerEntry::new("smc-knn", "SMC with the paper's flux: radiance over the kNN density of the VPLs (eq. 5 and 7)", smc_knn)
-            .with_keys(SmcConfig::KEYS),
+            .with_keys(SmcConfig::KEYS)
+            .with_memory(smc_memory(true)),
     ]
 }
 

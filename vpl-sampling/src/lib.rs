@@ -53,10 +53,9 @@
 #![warn(missing_docs)]
 
 mod builtin;
-pub use builtin::smc_config;
 mod registry;
 
-pub use registry::{BuildFn, Registry, SamplerContext, SamplerEntry, SamplingError};
+pub use registry::{BuildFn, MemoryFn, MemoryPart, Registry, SamplerContext, SamplerEntry, SamplingError};
 /// The core types a sampler works with, for crates that depend on this one only.
 pub use vpl_core;
 pub use vpl_core::{Budget, ParamError, ParamKey, Params, Services, Stats, VplSampler, VplSet};

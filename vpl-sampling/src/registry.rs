@@ -106,6 +106,22 @@ impl SamplerContext<'_> {
 /// The constructor of a registered sampler.
 pub type BuildFn = dyn Fn(&SamplerContext, &Params) -> Result<Box<dyn VplSampler>, SamplingError> + Send + Sync;
 
+/// The working memory a sampler's settings need beyond its VPLs, in parts
+/// ([`SamplerEntry::with_memory`]): budget, parameters → parts.
+pub type MemoryFn = dyn Fn(&Budget, &Params) -> Vec<MemoryPart> + Send + Sync;
+
+/// One part of a sampler's working memory, for the estimate a tool checks
+/// before it runs (`vpl --memory`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MemoryPart {
+    /// What it is, in words (`SMC area probes: 2048 VPLs × 16 hits × 16 iterations`).
+    pub what: String,
+    /// Its bytes.
+    pub bytes: u64,
+    /// The settings that make it smaller (`vpls`, `resample-ratio`).
+    pub keys: &'static [&'static str],
+}
+
 /// A sampler the registry can build by name.
 #[derive(Clone)]
 pub struct SamplerEntry {
@@ -113,10 +129,12 @@ pub struct SamplerEntry {
     pub name: String,
     /// One line about it.
     pub about: String,
-    /// The parameters it reads, for help texts.
+    /// The parameters it reads: help texts, and the command line's flags.
     pub keys: Vec<ParamKey>,
     /// Its constructor.
     pub build: Arc<BuildFn>,
+    /// Its working memory beyond the VPLs, where it is large enough to say.
+    pub memory: Option<Arc<MemoryFn>>,
 }
 
 impl std::fmt::Debug for SamplerEntry {
@@ -132,7 +150,22 @@ impl SamplerEntry {
         about: impl Into<String>,
         build: impl Fn(&SamplerContext, &Params) -> Result<Box<dyn VplSampler>, SamplingError> + Send + Sync + 'static,
     ) -> SamplerEntry {
-        SamplerEntry { name: name.into(), about: about.into(), keys: Vec::new(), build: Arc::new(build) }
+        SamplerEntry { name: name.into(), about: about.into(), keys: Vec::new(), build: Arc::new(build), memory: None }
+    }
+
+    /// The same entry, saying how much working memory its settings need
+    /// (parts a tool adds to its estimate before it runs). Settings the
+    /// sampler would refuse give no parts: building it says what is wrong.
+    pub fn with_memory(mut self, memory: impl Fn(&Budget, &Params) -> Vec<MemoryPart> + Send + Sync + 'static) -> SamplerEntry {
+        self.memory = Some(Arc::new(memory));
+        self
+    }
+
+    /// The parts of [`SamplerEntry::with_memory`] for `budget` and `params`
+    /// (none when the entry says nothing). Reading `params` here marks no
+    /// key read.
+    pub fn memory(&self, budget: &Budget, params: &Params) -> Vec<MemoryPart> {
+        self.memory.as_ref().map_or_else(Vec::new, |m| m(budget, &params.clone()))
     }
 
     /// The same entry, documenting the keys it reads.

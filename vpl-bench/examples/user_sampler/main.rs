@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::temp_dir().join(format!("vpl-user-sampler-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let runs = [
-        ("render.exr", "vpl render --scene cornell --method vpl --sampler uniform-area --set radiosity-paths=8 --vpls 256 --size 64x64"),
+        ("render.exr", "vpl render --scene cornell --method vpl --sampler uniform-area --radiosity-paths 8 --vpls 256 --size 64x64"),
         ("sequence", "vpl sequence --scene office --sampler uniform-area --vpls 128 --frames 0..3 --size 32x18 --shadowmap-res 16"),
         ("table1", "vpl table1 --scene maze --methods ir,uniform-area --frames 300..302 --size 32x24 --truth-spp 16"),
     ]

@@ -274,9 +274,10 @@ struct ProgressiveArgs {
     snapshots: Option<PathBuf>,
 }
 
-/// Settings of `--method vpl`. The sampler flags are keys of the sampler's
-/// parameters (`--m-max 8` is `--set m-max=8`); a flag or key the chosen
-/// sampler does not read is an error.
+/// Settings of `--method vpl`. The sampler flags are the keys of the
+/// registry's samplers (`--m-max 8` is `--set m-max=8`), made when the
+/// command line is built, so a program's own sampler gets flags too; a flag
+/// or key the chosen sampler does not read is an error.
 #[derive(clap::Args)]
 struct VplArgs {
     /// VPL sampler: a registry name (ir, rr, mir, mir-resample, tcas, smc, smc-knn, or one registered by the program).
@@ -285,58 +286,11 @@ struct VplArgs {
     /// A sampler parameter KEY=VALUE (repeat for more): any key the sampler reads.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-    /// How light paths draw their numbers (ir; rr over ir).
-    #[arg(long, value_enum)]
-    path_sampling: Option<PathSamplingArg>,
-    /// New light paths every frame (ir; without it a static scene keeps its VPLs).
-    #[arg(long)]
-    fresh_paths: bool,
-    /// SMC: VPLs allowed to move per frame (M_max; default 16).
-    #[arg(long)]
-    m_max: Option<usize>,
-    /// SMC: candidate-ray hits per candidate (default 16: 16·I hits to I candidates);
-    /// mir-resample: camera paths per VPL (default 256).
-    #[arg(long)]
-    resample_ratio: Option<usize>,
-    /// SMC, mir-resample: path-traced paths per VPL radiosity estimate (default 16).
-    #[arg(long)]
-    radiosity_paths: Option<u32>,
-    /// SMC, mir-resample: k of the VPL densities (default max(1, floor(sqrt(I/32))), eq. 8).
-    #[arg(long)]
-    knn_k: Option<usize>,
-    /// SMC: iterations before the first frame (default 100).
-    #[arg(long)]
-    warmup: Option<u32>,
-    /// RR: epsilon of eq. (3), the least acceptance probability (default 0.05).
-    #[arg(long, allow_hyphen_values = true)]
-    rr_epsilon: Option<f32>,
-    /// RR: estimate the image's indirect luminance from a pilot set on the first
-    /// frame (otherwise the first frame is plain IR, as in the paper).
-    #[arg(long)]
-    rr_pilot: bool,
-    /// RR, MIR, TCAS: camera samples the VPLs' importance is estimated against
-    /// (default 100 for rr and mir, 256 for tcas).
-    #[arg(long)]
-    camera_samples: Option<usize>,
-    /// TCAS: Metropolis-Hastings iterations per chain and frame (default 16);
-    /// MIR: steps between two recorded VPLs of a chain (default 4).
-    #[arg(long)]
-    mh_iterations: Option<u32>,
-    /// MIR: Markov chains run side by side (default 64).
-    #[arg(long)]
-    mir_chains: Option<usize>,
-    /// MIR: probability of a large (independent) step (default 0.3).
-    #[arg(long, allow_hyphen_values = true)]
-    mir_large_step: Option<f32>,
-    /// MIR: defensive share of the target for paths no camera sample sees (default 0.05).
-    #[arg(long, allow_hyphen_values = true)]
-    mir_defensive: Option<f32>,
-    /// TCAS: texels per side of each light's reflective shadow map (default 64).
-    #[arg(long)]
-    rsm_res: Option<u32>,
-    /// TCAS: further iterations on the first frame (default 48).
-    #[arg(long)]
-    tcas_warmup: Option<u32>,
+    /// Values of the sampler flags (`--m-max 8`), made from the registry's
+    /// keys when the command line is built ([`sampler_flags`]), in the
+    /// order given.
+    #[arg(skip)]
+    flags: Vec<(String, String)>,
     /// VPL-to-pixel visibility.
     #[arg(long, value_enum, default_value_t = VisibilityArg::Shadowmap)]
     visibility: VisibilityArg,
@@ -422,7 +376,24 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let cli = match Cli::try_parse_from(args) {
+    use clap::{CommandFactory, FromArgMatches};
+    let mut command = Cli::command();
+    for name in SAMPLER_COMMANDS {
+        command = command.mut_subcommand(name, |c| sampler_flags(c, registry));
+    }
+    let parsed = command.try_get_matches_from(args).and_then(|m| {
+        let mut cli = Cli::from_arg_matches(&m)?;
+        if let Some((_, sub)) = m.subcommand() {
+            let flags = sampler_flag_values(sub, registry);
+            match &mut cli.command {
+                Command::Render(a) => a.vpl_args().flags = flags,
+                Command::Sequence(a) => a.vpl_args().flags = flags,
+                _ => {}
+            }
+        }
+        Ok(cli)
+    });
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
@@ -674,64 +645,106 @@ fn pipeline_spec(
 
 /// `estimate` with the sampler's own working memory where it is large:
 /// SMC's area probes.
-fn with_sampler_memory(estimate: vpl_render::MemoryEstimate, spec: &crate::pipeline::PipelineSpec) -> vpl_render::MemoryEstimate {
-    // A copy of the parameters: reading them here must not mark them read for the build.
-    let params = spec.params.clone();
-    // The camera samples of TCAS, MIR and RR: one importon each, cast per frame.
-    let camera_samples: u64 = params.get_or("camera-samples", 0u64).unwrap_or(0);
-    let estimate = match camera_samples {
-        0 => estimate,
-        n => estimate.with_part(
-            format!("camera samples: {n} importons"),
-            n.saturating_mul(std::mem::size_of::<vpl_core::importons::Importon>() as u64),
-            &["camera-samples"],
-        ),
-    };
-    let Some(Ok(c)) = vpl_sampling::smc_config(&spec.sampler, &spec.budget, &params) else { return estimate };
-    match c.probe_memory() {
-        0 => estimate,
-        bytes => estimate.with_part(
-            format!("SMC area probes: {} VPLs × {} hits × {} iterations", c.vpls, c.resample_ratio, c.probe_iterations),
-            bytes,
-            &["vpls", "resample-ratio"],
-        ),
-    }
+fn with_sampler_memory(
+    estimate: vpl_render::MemoryEstimate,
+    spec: &crate::pipeline::PipelineSpec,
+    registry: &Registry,
+) -> vpl_render::MemoryEstimate {
+    let Ok(entry) = registry.entry(&spec.sampler) else { return estimate };
+    entry.memory(&spec.budget, &spec.params).into_iter().fold(estimate, |e, part| e.with_part(part.what, part.bytes, part.keys))
 }
 
 /// The sampler parameters the command line gives: each sampler flag that
 /// was given, under its own name as key, then every `--set KEY=VALUE`.
 fn sampler_params(v: &VplArgs) -> Res<vpl_core::Params> {
     let mut p = vpl_core::Params::new();
-    let mut put = |key: &str, value: Option<String>| -> Res<()> {
-        if let Some(value) = value {
-            p.insert(key, value).map_err(|e| format!("--{e}"))?;
-        }
+    let mut put = |key: &str, value: &str| -> Res<()> {
+        p.insert(key, value).map_err(|e| format!("--{e}"))?;
         Ok(())
     };
-    fn text<T: std::fmt::Display>(x: Option<T>) -> Option<String> {
-        x.map(|x| x.to_string())
+    for (k, value) in &v.flags {
+        put(k, value)?;
     }
-    put("path-sampling", v.path_sampling.map(|s| if s == PathSamplingArg::Halton { "halton".to_string() } else { "random".to_string() }))?;
-    put("fresh-paths", v.fresh_paths.then(|| "true".to_string()))?;
-    put("m-max", text(v.m_max))?;
-    put("resample-ratio", text(v.resample_ratio))?;
-    put("radiosity-paths", text(v.radiosity_paths))?;
-    put("knn-k", text(v.knn_k))?;
-    put("warmup", text(v.warmup))?;
-    put("rr-epsilon", text(v.rr_epsilon))?;
-    put("rr-pilot", v.rr_pilot.then(|| "true".to_string()))?;
-    put("camera-samples", text(v.camera_samples))?;
-    put("mh-iterations", text(v.mh_iterations))?;
-    put("mir-chains", text(v.mir_chains))?;
-    put("mir-large-step", text(v.mir_large_step))?;
-    put("mir-defensive", text(v.mir_defensive))?;
-    put("rsm-res", text(v.rsm_res))?;
-    put("tcas-warmup", text(v.tcas_warmup))?;
     for item in &v.set {
         let (k, value) = item.split_once('=').ok_or_else(|| format!("--set {item}: expected KEY=VALUE"))?;
-        put(k, Some(value.to_string()))?;
+        put(k, value)?;
     }
     Ok(p)
+}
+
+/// The subcommands whose `--sampler` takes sampler flags.
+const SAMPLER_COMMANDS: [&str; 2] = ["render", "sequence"];
+
+/// One flag for each key the samplers of `registry` read (`--m-max N`),
+/// added to the subcommand `c`: the help gathers what each sampler says of
+/// it and its default there; a key whose default is `false` everywhere is a
+/// switch. A key that one of the subcommand's own flags already names is
+/// left to `--set`.
+fn sampler_flags(mut c: clap::Command, registry: &Registry) -> clap::Command {
+    use clap::{Arg, ArgAction};
+    let mut keys: Vec<(&'static str, Vec<(String, vpl_core::ParamKey)>)> = Vec::new();
+    for entry in registry.entries() {
+        for k in &entry.keys {
+            match keys.iter_mut().find(|(key, _)| *key == k.key) {
+                Some((_, by)) => by.push((entry.name.clone(), *k)),
+                None => keys.push((k.key, vec![(entry.name.clone(), *k)])),
+            }
+        }
+    }
+    for (key, by) in keys {
+        let taken = key == "help" || c.get_arguments().any(|a| a.get_id() == key || a.get_long() == Some(key));
+        if taken {
+            continue;
+        }
+        // Samplers that say the same of the key are named together.
+        let mut said: Vec<(Vec<&str>, &str, &str)> = Vec::new();
+        for (name, k) in &by {
+            match said.iter_mut().find(|(_, about, default)| *about == k.about && *default == k.default) {
+                Some((names, _, _)) => names.push(name),
+                None => said.push((vec![name], k.about, k.default)),
+            }
+        }
+        let help: Vec<String> =
+            said.iter().map(|(names, about, default)| format!("{}: {about} (default {default})", names.join(", "))).collect();
+        let switch = by.iter().all(|(_, k)| k.default == "false");
+        let first = by[0].1.default;
+        let value_name = if first.parse::<u64>().is_ok() {
+            "N"
+        } else if first.parse::<f64>().is_ok() {
+            "X"
+        } else {
+            "VALUE"
+        };
+        let arg = Arg::new(key).long(key).help(help.join("; ")).help_heading("Sampler flags (the registry's keys)");
+        c = c.arg(if switch {
+            arg.action(ArgAction::SetTrue)
+        } else {
+            arg.value_name(value_name).allow_hyphen_values(true).action(ArgAction::Set)
+        });
+    }
+    c
+}
+
+/// The sampler flags given on a subcommand, as (key, value), in the order
+/// of the registry's keys.
+fn sampler_flag_values(m: &clap::ArgMatches, registry: &Registry) -> Vec<(String, String)> {
+    let mut out: Vec<(String, String)> = Vec::new();
+    for entry in registry.entries() {
+        for k in &entry.keys {
+            if out.iter().any(|(key, _)| key == k.key) || !m.try_contains_id(k.key).unwrap_or(false) {
+                continue;
+            }
+            if m.value_source(k.key) != Some(clap::parser::ValueSource::CommandLine) {
+                continue;
+            }
+            if let Ok(Some(v)) = m.try_get_one::<String>(k.key) {
+                out.push((k.key.to_string(), v.clone()));
+            } else if let Ok(Some(true)) = m.try_get_one::<bool>(k.key) {
+                out.push((k.key.to_string(), "true".to_string()));
+            }
+        }
+    }
+    out
 }
 
 /// A sampler's error in the CLI's words: every key is a flag (`--rr-epsilon`

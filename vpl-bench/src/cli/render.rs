@@ -46,6 +46,13 @@ pub(super) struct Args {
 }
 
 /// Runs `vpl render`.
+impl Args {
+    /// The VPL settings, for the sampler flags made at parse time.
+    pub(super) fn vpl_args(&mut self) -> &mut VplArgs {
+        &mut self.v
+    }
+}
+
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args {
         s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit, allow_outside },
@@ -209,7 +216,7 @@ fn render_vpl(
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
     let clamp = clamp.unwrap_or(vpl_render::Clamp::Auto).resolve(vpls, &sc, &camera);
     let spec = pipeline_spec(v, vpls, max_depth, mode, clamp.into(), seed)?;
-    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec);
+    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec, registry);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &sc)?;
     p.backend().check_size(camera.resolution).map_err(crate::pipeline::backend_line)?;

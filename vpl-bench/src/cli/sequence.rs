@@ -32,6 +32,13 @@ pub(super) struct Args {
 }
 
 /// Runs `vpl sequence`.
+impl Args {
+    /// The VPL settings, for the sampler flags made at parse time.
+    pub(super) fn vpl_args(&mut self) -> &mut VplArgs {
+        &mut self.v
+    }
+}
+
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args {
         s: SceneArgs { scene, frame, max_depth, clamp, vpls, size, seed, threads, memory_limit, allow_outside },
@@ -82,7 +89,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     }
     // The clamp's rule goes to the renderer: the view rule follows the camera.
     let spec = pipeline_spec(&v, vpls, max_depth, mode, clamp.unwrap_or(vpl_render::Clamp::Auto), seed)?;
-    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec);
+    let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&setup.scene, res, vpls, maps), &spec, registry);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &setup.scene)?;
     if let (Some(a), false) = (p.backend().device(), quiet) {

@@ -168,8 +168,10 @@ fn static_frames(sampler: &mut dyn vpl_core::VplSampler, n: u64) -> (Vec<Image>,
     let mut images = Vec::new();
     let mut rebuilt = Vec::new();
     for index in 0..n {
-        let r =
-            vpl_render::render_frame(&setup.scene, &camera, vpl_render::FrameSettings { index, ..s }, None, sampler, &mut vis, &mut shader);
+        let r = vpl_render::render_frame(
+            vpl_render::FrameRequest::new(&setup.scene, &camera, vpl_render::FrameSettings { index, ..s }),
+            vpl_render::FrameStages { sampler, visibility: &mut vis, shader: &mut shader },
+        );
         images.push(r.image);
         rebuilt.push(r.visibility.rebuilt);
     }

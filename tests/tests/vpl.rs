@@ -213,7 +213,11 @@ fn vpl_frames_are_bit_identical_across_thread_counts() {
             let mut vis = ShadowMaps::new(32).unwrap();
             let mut shader = InterleavedShader::new(Some(GeometryClamp::for_scene_area(300, scene.surface_area())), 7);
             let s = vpl_render::FrameSettings { seed: 7, ..vpl_render::FrameSettings::default() };
-            vpl_render::render_frame(&scene, &camera, s, None, &mut sampler, &mut vis, &mut shader).image
+            vpl_render::render_frame(
+                vpl_render::FrameRequest::new(&scene, &camera, s),
+                vpl_render::FrameStages { sampler: &mut sampler, visibility: &mut vis, shader: &mut shader },
+            )
+            .image
         })
     };
     let (a, b) = (frame(1), frame(2));

@@ -82,7 +82,7 @@ pub struct FrameOutput {
     /// [`crate::Renderer::render`] turns it into [`crate::RenderError::NonFinite`].
     pub non_finite: Option<(&'static str, usize)>,
     /// The frame stopped at a stage boundary because its cancel flag was set
-    /// ([`render_frame_cancellable_on`]): the image lacks the stages not run.
+    /// ([`FrameRequest::cancel`]): the image lacks the stages not run.
     /// [`crate::Renderer::render_cancellable`] turns it into
     /// [`crate::RenderError::Cancelled`].
     pub cancelled: bool,
@@ -104,66 +104,88 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// Renders one frame: the G-buffer; then, when the mode and depth keep paths
-/// with ≥ 2 scattering vertices, the sampler's VPLs, the visibility update,
-/// indirect shading and the clamp's bias compensation if asked for; then directly seen emission (k = 0) and direct
-/// light (k = 1) where the mode keeps them. `previous` is the indirect
-/// image of the previous frame ([`FrameOutput::indirect`]), which samplers
-/// that adapt to the image (Russian-roulette acceptance) read.
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame(
-    scene: &Scene,
-    camera: &Camera,
-    s: FrameSettings,
-    previous: Option<&Image>,
-    sampler: &mut dyn VplSampler,
-    vis: &mut dyn VplVisibility,
-    shader: &mut dyn IndirectShader,
-) -> FrameOutput {
-    let t0 = Instant::now();
-    let gbuffer = render_gbuffer(scene, camera);
-    render_frame_on(gbuffer, ms(t0), scene, camera, s, previous, sampler, vis, shader)
+/// The stages that make a frame's VPL light, each keeping its state from
+/// frame to frame.
+pub struct FrameStages<'a> {
+    /// The VPL sampler.
+    pub sampler: &'a mut dyn VplSampler,
+    /// The visibility structure, updated with the sampler's set.
+    pub visibility: &'a mut dyn VplVisibility,
+    /// The indirect shader.
+    pub shader: &'a mut dyn IndirectShader,
 }
 
-/// [`render_frame`] from a G-buffer rendered elsewhere (on a GPU) in
-/// `gbuffer_ms` milliseconds.
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame_on(
-    gbuffer: GBuffer,
-    gbuffer_ms: f64,
-    scene: &Scene,
-    camera: &Camera,
-    s: FrameSettings,
-    previous: Option<&Image>,
-    sampler: &mut dyn VplSampler,
-    vis: &mut dyn VplVisibility,
-    shader: &mut dyn IndirectShader,
-) -> FrameOutput {
-    render_frame_cancellable_on(gbuffer, gbuffer_ms, scene, camera, s, previous, sampler, vis, shader, &AtomicBool::new(false))
+/// One frame asked of [`render_frame`]: the scene and camera, the settings,
+/// and what a caller may bring ([`FrameRequest::new`] brings none of it).
+#[derive(Clone, Debug)]
+pub struct FrameRequest<'a> {
+    /// The scene at this frame's time.
+    pub scene: &'a Scene,
+    /// The camera, at the image's resolution.
+    pub camera: &'a Camera,
+    /// Mode, depth, seed, index, time, compensation.
+    pub settings: FrameSettings,
+    /// The indirect image of the previous frame ([`FrameOutput::indirect`]),
+    /// which samplers that adapt to the image (Russian-roulette acceptance)
+    /// read.
+    pub previous: Option<&'a Image>,
+    /// A G-buffer rendered elsewhere (on a GPU) and the milliseconds it
+    /// took; `None`: rendered here on the CPU.
+    pub gbuffer: Option<(GBuffer, f64)>,
+    /// Set from another thread (a Ctrl-C handler, a viewer's camera move),
+    /// it stops the frame at the next stage boundary with
+    /// [`FrameOutput::cancelled`] set. The boundaries are before the
+    /// sampler, after the visibility update, after shading and after the
+    /// bias compensation: the sampler's step and the visibility update it
+    /// calls for run together or not at all, so that the visibility always
+    /// matches the sampler's set. A frame that is not cancelled is the same,
+    /// bit for bit, as one without a flag.
+    pub cancel: Option<&'a AtomicBool>,
 }
 
-/// [`render_frame_on`] that stops at the next stage boundary once `cancel`
-/// is set (from another thread: a Ctrl-C handler, a viewer's camera move),
-/// with [`FrameOutput::cancelled`] set. The boundaries are before the
-/// sampler, after the visibility update, after shading and after the bias
-/// compensation: the sampler's step and the visibility update it calls for
-/// run together or not at all, so that the visibility always matches the
-/// sampler's set. A frame that is not cancelled is [`render_frame_on`]'s,
-/// bit for bit.
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame_cancellable_on(
-    gbuffer: GBuffer,
-    gbuffer_ms: f64,
-    scene: &Scene,
-    camera: &Camera,
-    s: FrameSettings,
-    previous: Option<&Image>,
-    sampler: &mut dyn VplSampler,
-    vis: &mut dyn VplVisibility,
-    shader: &mut dyn IndirectShader,
-    cancel: &AtomicBool,
-) -> FrameOutput {
-    let stop = || cancel.load(Ordering::Relaxed);
+impl<'a> FrameRequest<'a> {
+    /// Frame `settings` of `scene` seen by `camera`, with no previous
+    /// image, the G-buffer rendered here and no cancel flag.
+    pub fn new(scene: &'a Scene, camera: &'a Camera, settings: FrameSettings) -> FrameRequest<'a> {
+        FrameRequest { scene, camera, settings, previous: None, gbuffer: None, cancel: None }
+    }
+
+    /// The same request with the previous frame's indirect image.
+    pub fn previous(mut self, previous: Option<&'a Image>) -> FrameRequest<'a> {
+        self.previous = previous;
+        self
+    }
+
+    /// The same request with a G-buffer rendered elsewhere in `ms` milliseconds.
+    pub fn gbuffer(mut self, gbuffer: GBuffer, ms: f64) -> FrameRequest<'a> {
+        self.gbuffer = Some((gbuffer, ms));
+        self
+    }
+
+    /// The same request, stopped at a stage boundary once `cancel` is set.
+    pub fn cancel(mut self, cancel: &'a AtomicBool) -> FrameRequest<'a> {
+        self.cancel = Some(cancel);
+        self
+    }
+}
+
+/// Renders one frame: the G-buffer (unless the request brings one); then,
+/// when the mode and depth keep paths with ≥ 2 scattering vertices, the
+/// sampler's VPLs, the visibility update, indirect shading and the clamp's
+/// bias compensation if asked for; then directly seen emission (k = 0) and
+/// direct light (k = 1) where the mode keeps them.
+pub fn render_frame(request: FrameRequest<'_>, stages: FrameStages<'_>) -> FrameOutput {
+    let FrameRequest { scene, camera, settings: s, previous, gbuffer, cancel } = request;
+    let FrameStages { sampler, visibility: vis, shader } = stages;
+    let (gbuffer, gbuffer_ms) = match gbuffer {
+        Some(g) => g,
+        None => {
+            let t0 = Instant::now();
+            let g = render_gbuffer(scene, camera);
+            (g, ms(t0))
+        }
+    };
+    let stop = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let start = Instant::now();
     let mut t = StageTimings { gbuffer_ms, ..StageTimings::default() };
     let mut image = Image::new(camera.resolution.0, camera.resolution.1);

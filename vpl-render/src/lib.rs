@@ -17,7 +17,8 @@
 //! - [`PipelineSpec`]: one description of a renderer (sampler and
 //!   parameters, budget, stages, clamp, backend by name), one line of text
 //!   as its written form, what the command line, Python and experiments use;
-//! - [`render_frame`]: one frame from given stages, timed per stage;
+//! - [`render_frame`]: one frame ([`FrameRequest`]) from given stages
+//!   ([`FrameStages`]), timed per stage;
 //! - [`sequence`]: frames of a scene's animation with tracked pixels, CSV;
 //! - [`metrics`] and [`compare`]: relMSE, RMSE, the SMC paper's |E| and |E′|,
 //!   per-pixel z-tests against a reference with standard errors.
@@ -80,7 +81,7 @@ pub use backend::{Backend, CpuBackend};
 pub use backends::{BackendEntry, BackendFactory, Backends};
 pub use compensation::Compensation;
 pub use error::RenderError;
-pub use frame::{FrameOutput, FrameSettings, StageTimings, count_non_finite, render_frame, render_frame_cancellable_on, render_frame_on};
+pub use frame::{FrameOutput, FrameRequest, FrameSettings, FrameStages, StageTimings, count_non_finite, render_frame};
 pub use memory::MemoryEstimate;
 pub use pipeline::PipelineSpec;
 pub use renderer::{Renderer, RendererBuilder, SamplerChoice};

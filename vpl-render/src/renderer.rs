@@ -5,7 +5,7 @@
 use crate::backend::{Backend, CpuBackend};
 use crate::compensation::Compensation;
 use crate::error::RenderError;
-use crate::frame::{FrameOutput, FrameSettings, render_frame_cancellable_on};
+use crate::frame::{FrameOutput, FrameRequest, FrameSettings, FrameStages, render_frame};
 use crate::spec::{Clamp, ReadBack, ShadingSpec, VisibilitySpec};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -273,7 +273,7 @@ impl Renderer {
 
     /// [`Renderer::render`] that stops at the next stage boundary once
     /// `cancel` is set (from another thread) and answers
-    /// [`RenderError::Cancelled`]; see [`crate::render_frame_cancellable_on`]
+    /// [`RenderError::Cancelled`]; see [`FrameRequest::cancel`]
     /// for the boundaries. A cancelled frame may have advanced the sampler
     /// (and with it the visibility, which always matches the sampler's set)
     /// but leaves the previous frame's image, which adaptive samplers read,
@@ -341,17 +341,9 @@ impl Renderer {
             None => self.backend.gbuffer(scene, camera)?,
         };
         let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let mut out = render_frame_cancellable_on(
-            gbuffer,
-            ms,
-            scene,
-            camera,
-            settings,
-            self.previous.as_ref(),
-            self.sampler.as_mut(),
-            self.visibility.as_mut(),
-            shader.as_mut(),
-            cancel,
+        let mut out = render_frame(
+            FrameRequest::new(scene, camera, settings).previous(self.previous.as_ref()).gbuffer(gbuffer, ms).cancel(cancel),
+            FrameStages { sampler: self.sampler.as_mut(), visibility: self.visibility.as_mut(), shader: shader.as_mut() },
         );
         if out.cancelled {
             return Err(RenderError::Cancelled { frame: index });

@@ -3,7 +3,7 @@
 //! visibility and the clamp; bad settings are typed errors naming the key.
 
 use vpl_core::{GeometryClamp, Mode, Params, SceneSetup};
-use vpl_render::{Clamp, FrameSettings, RenderError, Renderer, ShadingSpec, VisibilitySpec, render_frame};
+use vpl_render::{Clamp, FrameRequest, FrameSettings, FrameStages, RenderError, Renderer, ShadingSpec, VisibilitySpec, render_frame};
 use vpl_sampling::{InstantRadiosity, IrConfig, Registry, SamplingError};
 use vpl_shading::ExhaustiveShader;
 use vpl_visibility::RayTraced;
@@ -35,7 +35,10 @@ fn the_builder_renders_what_the_stages_render_by_hand() {
         let built = renderer.render(&setup.scene, &camera, index, 0.0).unwrap();
         assert_eq!(renderer.clamp(), Some(clamp));
         let s = FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 2, seed: 11, index, time: 0.0, compensation: None };
-        let by_hand = render_frame(&setup.scene, &camera, s, None, &mut ir, &mut vis, &mut shader);
+        let by_hand = render_frame(
+            FrameRequest::new(&setup.scene, &camera, s),
+            FrameStages { sampler: &mut ir, visibility: &mut vis, shader: &mut shader },
+        );
         assert_eq!(built.stored, by_hand.stored, "frame {index}");
         assert!(built.image.data == by_hand.image.data, "frame {index}: the builder's image differs from the stages'");
         assert!(built.image.mean()[0] > 0.0);
@@ -235,9 +238,12 @@ fn the_auto_clamp_follows_the_view() {
     let mut vis = RayTraced::default();
     let mut shader = ExhaustiveShader { clamp: Some(c_far) };
     let s = |index| FrameSettings { mode: Mode::Full, max_depth: 4, direct_samples: 16, seed: 5, index, time: 0.0, compensation: None };
-    render_frame(&setup.scene, &far, s(0), None, &mut ir, &mut vis, &mut shader);
-    render_frame(&setup.scene, &far, s(1), None, &mut ir, &mut vis, &mut shader);
+    render_frame(FrameRequest::new(&setup.scene, &far, s(0)), FrameStages { sampler: &mut ir, visibility: &mut vis, shader: &mut shader });
+    render_frame(FrameRequest::new(&setup.scene, &far, s(1)), FrameStages { sampler: &mut ir, visibility: &mut vis, shader: &mut shader });
     shader.clamp = Some(c_near);
-    let by_hand = render_frame(&setup.scene, &near, s(2), None, &mut ir, &mut vis, &mut shader);
+    let by_hand = render_frame(
+        FrameRequest::new(&setup.scene, &near, s(2)),
+        FrameStages { sampler: &mut ir, visibility: &mut vis, shader: &mut shader },
+    );
     assert!(built.image.data == by_hand.image.data, "the renderer did not shade with the near view's clamp");
 }

@@ -167,6 +167,13 @@ pub trait VplVisibility: Send + Sync {
     /// The concrete type, for shaders with a fused fast path for a known
     /// visibility (they must give the same result as [`VplVisibility::attenuate`]).
     fn as_any(&self) -> &dyn std::any::Any;
+    /// The shadow maps this visibility answers from, where every answer is
+    /// its slot's map's (no map: not visible): shaders may read them
+    /// directly, with the same result as [`VplVisibility::attenuate`].
+    /// `None` (the default) for any other visibility.
+    fn shadow_maps(&self) -> Option<&dyn crate::ShadowMapSource> {
+        None
+    }
 }
 
 /// Turns VPLs into the indirect radiance of every G-buffer pixel.

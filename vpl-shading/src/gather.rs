@@ -2,7 +2,6 @@
 //! batch of receivers, so its visibility data stays in cache.
 
 use vpl_core::{GeometryClamp, Receivers, VplSet, VplVisibility};
-use vpl_visibility::ShadowMaps;
 
 /// Per-receiver sums of flux · min(G, G_max) · V, one array per channel.
 #[derive(Clone, Debug, Default)]
@@ -33,7 +32,7 @@ pub(crate) fn gather(
 ) {
     let n = rx.len();
     let g_max = clamp.map_or(f32::INFINITY, |c| c.g_max);
-    if let Some(sm) = vis.as_any().downcast_ref::<ShadowMaps>() {
+    if let Some(sm) = vis.shadow_maps() {
         return crate::gather_maps::gather_shadow_maps(rx, vpls, slots, sm, g_max, sums);
     }
     w.resize(n, 0.0);
@@ -85,6 +84,7 @@ mod tests {
     use super::*;
     use vpl_core::glam::Vec3;
     use vpl_core::{GBuffer, Scene, SceneSetup, VisibilityUpdate};
+    use vpl_visibility::ShadowMaps;
 
     /// Shadow maps behind a wrapper the fast path does not recognise.
     struct Opaque(ShadowMaps);

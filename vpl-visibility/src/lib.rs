@@ -53,4 +53,6 @@ mod shadow_maps;
 
 pub use paraboloid::{direction_to_paraboloid, paraboloid_to_direction};
 pub use raytraced::RayTraced;
-pub use shadow_maps::{DEFAULT_RESOLUTION, MAX_RESOLUTION, MapView, ShadowMapError, ShadowMaps};
+pub use shadow_maps::{DEFAULT_RESOLUTION, MAX_RESOLUTION, ShadowMapError, ShadowMaps};
+/// A map as shaders read it (defined in vpl-core, beside the trait that hands it out).
+pub use vpl_core::MapView;

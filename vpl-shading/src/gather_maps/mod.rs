@@ -1,6 +1,6 @@
 //! The gather with shadow-map visibility, fused into one pass per VPL and
 //! eight receivers wide: the geometry term and the test of
-//! [`vpl_visibility::MapView::visible`] lane by lane, without the weight
+//! [`vpl_core::MapView::visible`] lane by lane, without the weight
 //! array and the per-VPL dynamic call of the generic gather.
 //!
 //! Two implementations compute the same lanes with the same operations in
@@ -34,8 +34,7 @@
 
 use crate::gather::Sums;
 use vpl_core::glam::Vec3;
-use vpl_core::{Receivers, VplSet};
-use vpl_visibility::ShadowMaps;
+use vpl_core::{Receivers, ShadowMapSource, VplSet};
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
@@ -72,10 +71,10 @@ struct Light<'a> {
 }
 
 /// The VPLs of `slots` that have a map.
-fn lights<'a>(vpls: &'a VplSet, slots: &'a [u32], sm: &'a ShadowMaps, g_max: f32) -> impl Iterator<Item = Light<'a>> + 'a {
+fn lights<'a>(vpls: &'a VplSet, slots: &'a [u32], sm: &'a dyn ShadowMapSource, g_max: f32) -> impl Iterator<Item = Light<'a>> + 'a {
     slots.iter().filter_map(move |&slot| {
         let v = vpls.get(slot as usize)?;
-        let view = sm.view(slot as usize)?;
+        let view = sm.map(slot as usize)?;
         let f = view.frame();
         let (eps2, texel) = view.bias_terms();
         let (depth, res) = view.depths();
@@ -128,7 +127,7 @@ fn add_tail(sums: &mut Sums, i: usize, flux: Vec3, w: &[f32; LANES]) {
 
 /// Adds Σ flux · min(G, G_max) · V over the VPLs of `slots` to `sums`,
 /// with visibility from `sm`'s maps.
-pub(crate) fn gather_shadow_maps(rx: &Receivers, vpls: &VplSet, slots: &[u32], sm: &ShadowMaps, g_max: f32, sums: &mut Sums) {
+pub(crate) fn gather_shadow_maps(rx: &Receivers, vpls: &VplSet, slots: &[u32], sm: &dyn ShadowMapSource, g_max: f32, sums: &mut Sums) {
     #[cfg(target_arch = "x86_64")]
     if avx2::gather(rx, lights(vpls, slots, sm, g_max), sums) {
         return;
@@ -139,6 +138,13 @@ pub(crate) fn gather_shadow_maps(rx: &Receivers, vpls: &VplSet, slots: &[u32], s
 /// [`gather_shadow_maps`] on the portable lanes whatever the CPU (for
 /// tests that compare the two implementations).
 #[cfg(test)]
-pub(crate) fn gather_shadow_maps_portable(rx: &Receivers, vpls: &VplSet, slots: &[u32], sm: &ShadowMaps, g_max: f32, sums: &mut Sums) {
+pub(crate) fn gather_shadow_maps_portable(
+    rx: &Receivers,
+    vpls: &VplSet,
+    slots: &[u32],
+    sm: &dyn ShadowMapSource,
+    g_max: f32,
+    sums: &mut Sums,
+) {
     lanes::gather(rx, lights(vpls, slots, sm, g_max), sums)
 }

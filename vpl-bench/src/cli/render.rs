@@ -90,48 +90,29 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     names.extend(stderr.as_ref().map(|s| ("--stderr", s.path.as_path())));
     distinct(&names)?;
     let pool = pool(threads)?;
+    let job = Job {
+        scene: &scene,
+        frame,
+        size,
+        seed,
+        max_depth,
+        clamp,
+        vpls,
+        out: &out,
+        exposure,
+        quiet,
+        memory_limit,
+        pool: &pool,
+        tev: tev.as_deref(),
+    };
     if method == Method::Progressive {
-        return render_progressive(
-            &scene,
-            policy,
-            frame,
-            size,
-            seed,
-            max_depth,
-            clamp,
-            vpls,
-            &p,
-            &out,
-            stderr.as_ref(),
-            exposure,
-            quiet,
-            memory_limit,
-            &pool,
-            tev.as_deref(),
-        );
+        return render_progressive(job, policy, &p, stderr.as_ref());
     }
     if method == Method::Vpl {
         if stderr.is_some() {
             return Err("--stderr is for --method path: one VPL render has no per-pixel error estimate".into());
         }
-        return render_vpl(
-            registry,
-            &scene,
-            frame,
-            size,
-            seed,
-            max_depth,
-            mode,
-            clamp,
-            vpls,
-            &v,
-            &out,
-            exposure,
-            quiet,
-            memory_limit,
-            &pool,
-            tev.as_deref(),
-        );
+        return render_vpl(registry, job, mode, &v);
     }
     let (sc, camera) = load_frame(&scene, frame, size)?;
     let sc = with_policy(sc, policy, "the path tracer (--materials diffuse)");
@@ -192,25 +173,27 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
 }
 
 /// `vpl render --method vpl`.
-#[allow(clippy::too_many_arguments)]
-fn render_vpl(
-    registry: &Registry,
-    scene: &SceneSource,
+/// What `--method vpl` and `--method progressive` share of a render: the
+/// scene's flags, the output and how the run reports.
+#[derive(Clone, Copy)]
+struct Job<'a> {
+    scene: &'a SceneSource,
     frame: u32,
     size: Option<Size>,
     seed: u64,
     max_depth: u32,
-    mode: ModeArg,
     clamp: Option<vpl_render::Clamp>,
     vpls: usize,
-    v: &VplArgs,
-    out: &ImageOut,
+    out: &'a ImageOut,
     exposure: f32,
     quiet: bool,
     memory_limit: Option<MemoryArg>,
-    pool: &rayon::ThreadPool,
-    tev: Option<&str>,
-) -> Res<()> {
+    pool: &'a rayon::ThreadPool,
+    tev: Option<&'a str>,
+}
+
+fn render_vpl(registry: &Registry, job: Job<'_>, mode: ModeArg, v: &VplArgs) -> Res<()> {
+    let Job { scene, frame, size, seed, max_depth, clamp, vpls, out, exposure, quiet, memory_limit, pool, tev } = job;
     let (sc, camera) = load_frame(scene, frame, size)?;
     let sc = with_policy(sc, vpl_core::MaterialPolicy::Diffuse, "the VPL pipeline (compare with --method path --materials diffuse)");
     let maps = (v.visibility == VisibilityArg::Shadowmap).then_some(v.shadowmap_res);
@@ -272,25 +255,8 @@ fn render_vpl(
 }
 
 /// `vpl render --method progressive`.
-#[allow(clippy::too_many_arguments)]
-fn render_progressive(
-    scene: &SceneSource,
-    policy: vpl_core::MaterialPolicy,
-    frame: u32,
-    size: Option<Size>,
-    seed: u64,
-    max_depth: u32,
-    clamp: Option<vpl_render::Clamp>,
-    vpls: usize,
-    p: &ProgressiveArgs,
-    out: &ImageOut,
-    stderr: Option<&ImageOut>,
-    exposure: f32,
-    quiet: bool,
-    memory_limit: Option<MemoryArg>,
-    pool: &rayon::ThreadPool,
-    tev: Option<&str>,
-) -> Res<()> {
+fn render_progressive(job: Job<'_>, policy: vpl_core::MaterialPolicy, p: &ProgressiveArgs, stderr: Option<&ImageOut>) -> Res<()> {
+    let Job { scene, frame, size, seed, max_depth, clamp, vpls, out, exposure, quiet, memory_limit, pool, tev } = job;
     use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
     if p.passes == Some(0) {
         return Err("--passes must be at least 1".into());

@@ -162,24 +162,32 @@ fn emit(scene: &Scene, v: &PassVpl, map: Option<&ProjectionMap>, n: f32, rng: &m
     }
 }
 
-/// Traces `n` photons from VPL `v` (photon numbers `first..first + n` of
-/// the pass) and collects their deposits into `bins`.
-#[allow(clippy::too_many_arguments)]
+/// Which photons of a pass one VPL traces: numbers `first..first + n` of
+/// pass `pass` (each its own random stream).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Photons {
+    /// The pass.
+    pub pass: u64,
+    /// The first photon's number in the pass.
+    pub first: u64,
+    /// How many.
+    pub n: u64,
+}
+
+/// Traces the `photons` of VPL `v` and collects their deposits into `bins`.
 pub fn trace_photons(
     scene: &Scene,
     cfg: &ProgressiveConfig,
-    pass: u64,
     v: &PassVpl,
     bounds: &SpecularSet,
-    first: u64,
-    n: u64,
+    photons: Photons,
     bins: &Bins,
 ) -> SourceResult {
     let mut out = SourceResult { coverage: 1.0, ..Default::default() };
     let map = if cfg.projection_maps {
         let Some(y) = v.position(scene) else {
             // The sun or the sky: parallel photons from a disk, no map.
-            return trace_with(scene, cfg, pass, v, None, first, n, bins, out);
+            return trace_with(scene, cfg, v, None, photons, bins, out);
         };
         let hemisphere = match v.emitter {
             Emitter::Light { light, .. } => match &scene.lights[light] {
@@ -197,21 +205,19 @@ pub fn trace_photons(
     } else {
         None
     };
-    trace_with(scene, cfg, pass, v, map.as_ref(), first, n, bins, out)
+    trace_with(scene, cfg, v, map.as_ref(), photons, bins, out)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn trace_with(
     scene: &Scene,
     cfg: &ProgressiveConfig,
-    pass: u64,
     v: &PassVpl,
     map: Option<&ProjectionMap>,
-    first: u64,
-    n: u64,
+    photons: Photons,
     bins: &Bins,
     mut out: SourceResult,
 ) -> SourceResult {
+    let Photons { pass, first, n } = photons;
     let eps = scene.epsilon();
     let max_vertices = cfg.max_depth.saturating_sub(1);
     for p in 0..n {

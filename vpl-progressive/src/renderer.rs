@@ -4,7 +4,7 @@ use crate::config::{Culling, ProgressiveConfig};
 use crate::error::ProgressiveError;
 use crate::eye::{EyePath, EyeVertex, pixel_angle, trace_eye};
 use crate::gather::{contribution, sees};
-use crate::histogram::{Bins, SourceResult, trace_photons};
+use crate::histogram::{Bins, Photons, SourceResult, trace_photons};
 use crate::light_paths::{Emitter, PassVpl, trace_light_path};
 use crate::projection::{SpecularBound, SpecularSet};
 use rayon::prelude::*;
@@ -261,7 +261,7 @@ impl<'s> Progressive<'s> {
                 let results: Vec<SourceResult> = sources
                     .par_iter()
                     .enumerate()
-                    .map(|(i, v)| trace_photons(scene, cfg, pass, v, &self.bounds, i as u64 * n, n, &bins))
+                    .map(|(i, v)| trace_photons(scene, cfg, v, &self.bounds, Photons { pass, first: i as u64 * n, n }, &bins))
                     .collect();
                 let mut coverage = 0.0f64;
                 for r in &results {

@@ -56,21 +56,27 @@ impl Camera {
     /// A pinhole camera. Errors on a degenerate frame, a field of view outside
     /// (0°, 180°) or a zero-sized image.
     pub fn new(origin: Vec3, target: Vec3, up: Vec3, fov_deg: f32, fov_axis: FovAxis, resolution: (u32, u32)) -> Result<Camera> {
-        Self::thin_lens(origin, target, up, fov_deg, fov_axis, resolution, 0.0, 1.0)
+        Self::make(origin, target, up, fov_deg, fov_axis, resolution, (0.0, 1.0))
     }
 
-    /// A thin-lens camera with aperture radius `lens_radius` focused at `focus_distance`.
-    #[allow(clippy::too_many_arguments)]
+    /// The same camera as a thin lens of aperture radius `lens_radius`
+    /// focused at `focus_distance` (radius 0: a pinhole). Errors on a
+    /// negative radius, a focus distance that is not positive, or either
+    /// beyond the scene's coordinate bound.
+    pub fn with_lens(&self, lens_radius: f32, focus_distance: f32) -> Result<Camera> {
+        Self::make(self.origin, self.target, self.up, self.fov_deg, self.fov_axis, self.resolution, (lens_radius, focus_distance))
+    }
+
+    /// The camera of these settings; `lens` is (aperture radius, focus distance).
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is meant: a NaN fails the test
-    pub fn thin_lens(
+    fn make(
         origin: Vec3,
         target: Vec3,
         up: Vec3,
         fov_deg: f32,
         fov_axis: FovAxis,
         resolution: (u32, u32),
-        lens_radius: f32,
-        focus_distance: f32,
+        (lens_radius, focus_distance): (f32, f32),
     ) -> Result<Camera> {
         if !(fov_deg > 0.0 && fov_deg < 180.0) {
             return Err(CoreError::Camera(format!("field of view must be in (0, 180) degrees, got {fov_deg}")));
@@ -144,12 +150,12 @@ impl Camera {
 
     /// The same camera rendering `resolution` pixels (field of view kept on its axis).
     pub fn with_resolution(&self, resolution: (u32, u32)) -> Result<Camera> {
-        Self::thin_lens(self.origin, self.target, self.up, self.fov_deg, self.fov_axis, resolution, self.lens_radius, self.focus_distance)
+        Self::make(self.origin, self.target, self.up, self.fov_deg, self.fov_axis, resolution, (self.lens_radius, self.focus_distance))
     }
 
     /// The same camera moved to `origin` looking at `target`.
     pub fn looking(&self, origin: Vec3, target: Vec3) -> Result<Camera> {
-        Self::thin_lens(origin, target, self.up, self.fov_deg, self.fov_axis, self.resolution, self.lens_radius, self.focus_distance)
+        Self::make(origin, target, self.up, self.fov_deg, self.fov_axis, self.resolution, (self.lens_radius, self.focus_distance))
     }
 
     /// Unit view direction.
@@ -287,7 +293,7 @@ mod tests {
     /// of the largest allowed lens has a unit direction.
     #[test]
     fn lenses_and_positions_beyond_the_coordinate_bound_are_refused() {
-        let lens = |r: f32, f: f32| Camera::thin_lens(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (4, 4), r, f);
+        let lens = |r: f32, f: f32| Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, FovAxis::X, (4, 4)).and_then(|c| c.with_lens(r, f));
         for (r, f) in [(1e20, 1.0), (1.0, 1e20), (f32::INFINITY, 1.0)] {
             let e = lens(r, f).unwrap_err().to_string();
             assert!(e.contains("lens radius") && e.contains("coordinate bound") || e.contains("≥ 0"), "{r} {f}: {e}");

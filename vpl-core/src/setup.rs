@@ -325,16 +325,15 @@ pub fn light_from_spec(s: &LightSpec) -> Result<Light> {
 
 /// The [`Camera`] a `[camera]` table describes.
 pub fn camera_from_spec(c: &CameraSpec) -> Result<Camera> {
-    Camera::thin_lens(
+    Camera::new(
         vec3(c.origin, "camera origin")?,
         vec3(c.target, "camera target")?,
         vec3(c.up, "camera up")?,
         c.fov,
         c.fov_axis,
         (c.resolution[0], c.resolution[1]),
-        c.lens_radius,
-        c.focus_distance,
-    )
+    )?
+    .with_lens(c.lens_radius, c.focus_distance)
 }
 
 fn material_to_spec(m: &Material) -> crate::scene_file::MaterialSpec {

@@ -45,7 +45,7 @@ proptest! {
 #[test]
 fn thin_lens_focuses_the_focus_plane() {
     // Rays through one raster position meet at the focus distance whatever the lens sample.
-    let cam = Camera::thin_lens(Vec3::ZERO, -Vec3::Z, Vec3::Y, 40.0, FovAxis::Smaller, (100, 100), 0.2, 5.0).unwrap();
+    let cam = Camera::new(Vec3::ZERO, -Vec3::Z, Vec3::Y, 40.0, FovAxis::Smaller, (100, 100)).unwrap().with_lens(0.2, 5.0).unwrap();
     let a = cam.ray(30.0, 70.0, (0.1, 0.9));
     let b = cam.ray(30.0, 70.0, (0.8, 0.2));
     assert!((a.o - b.o).length() > 0.05, "different lens positions");

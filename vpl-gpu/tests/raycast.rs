@@ -16,7 +16,7 @@ mod common;
 use common::context;
 use vpl_core::glam::Vec3;
 use vpl_core::sampling::uniform_sphere;
-use vpl_core::{Camera, CameraRays, Purpose, Ray, Scene, SceneSetup, stream};
+use vpl_core::{CameraRays, Purpose, Ray, Scene, SceneSetup, stream};
 use vpl_gpu::{GpuRayCaster, GpuScene};
 
 /// Camera rays over a 96×64 image and rays in random directions from random
@@ -119,7 +119,7 @@ fn camera_rays_made_on_the_device_hit_what_the_host_rays_hit() {
     let caster = GpuRayCaster::new(&ctx);
     let c = setup.camera.with_resolution((320, 180)).unwrap();
     let focus = (c.target - c.origin).length();
-    let lens = Camera::thin_lens(c.origin, c.target, c.up, c.fov_deg, c.fov_axis, c.resolution, 0.05 * focus, focus).unwrap();
+    let lens = c.with_lens(0.05 * focus, focus).unwrap();
     let extent = (scene.geometry.bounds.1 - scene.geometry.bounds.0).length();
     for (name, camera) in [("pinhole", &c), ("thin lens", &lens)] {
         let batch = CameraRays::new(camera, 0x5EED_0001, 20_000);

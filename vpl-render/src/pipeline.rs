@@ -66,12 +66,13 @@ pub struct PipelineSpec {
 }
 
 impl Default for PipelineSpec {
-    /// SMC with the papers' budget (2048 VPLs, max depth 5), 128² shadow
+    /// IR with the papers' budget (2048 VPLs, max depth 5), 128² shadow
     /// maps, interleaved and filtered shading, the view's clamp, full light
-    /// with 16 direct samples, seed 0, on the CPU.
+    /// with 16 direct samples, seed 0, on the CPU: what
+    /// [`Renderer::builder`] starts from too.
     fn default() -> Self {
         PipelineSpec {
-            sampler: "smc".into(),
+            sampler: "ir".into(),
             params: Params::new(),
             budget: Budget::default(),
             visibility: VisibilitySpec::default(),

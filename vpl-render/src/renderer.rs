@@ -248,19 +248,22 @@ pub struct Renderer {
 impl Renderer {
     /// A builder for frames of `scene` (the `auto` clamp reads its area).
     pub fn builder(scene: &Scene) -> RendererBuilder<'_> {
+        // The settings a pipeline description leaves out; the backend is
+        // the CPU unless one is given.
+        let d = crate::PipelineSpec::default();
         RendererBuilder {
             scene,
-            budget: Budget::default(),
-            sampler: SamplerChoice::Named("ir".into()),
-            params: Params::new(),
+            budget: d.budget,
+            sampler: SamplerChoice::Named(d.sampler),
+            params: d.params,
             registry: None,
-            visibility: VisibilitySpec::default(),
-            shading: ShadingSpec::default(),
-            clamp: Clamp::Auto,
-            compensation: 0,
-            mode: Mode::Full,
-            direct_samples: 16,
-            seed: 0,
+            visibility: d.visibility,
+            shading: d.shading,
+            clamp: d.clamp,
+            compensation: d.compensation,
+            mode: d.mode,
+            direct_samples: d.direct_samples,
+            seed: d.seed,
             backend: None,
             read_back: ReadBack::All,
         }

@@ -201,12 +201,6 @@ enum ShadingArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum PathSamplingArg {
-    Random,
-    Halton,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum BinsArg {
     /// The closest bin only (the paper's rule; darker where bins crowd).
     Closest,
@@ -643,8 +637,8 @@ fn pipeline_spec(
     })
 }
 
-/// `estimate` with the sampler's own working memory where it is large:
-/// SMC's area probes.
+/// `estimate` with the sampler's own working memory, as its registry entry
+/// states it ([`vpl_sampling::SamplerEntry::with_memory`]).
 fn with_sampler_memory(
     estimate: vpl_render::MemoryEstimate,
     spec: &crate::pipeline::PipelineSpec,

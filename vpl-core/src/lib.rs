@@ -89,7 +89,6 @@ pub mod shadow_map;
 pub mod spectral;
 pub mod stats;
 pub mod surface;
-pub mod tev;
 pub mod traits;
 pub mod triangle;
 pub mod validate;

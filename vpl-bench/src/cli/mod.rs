@@ -31,6 +31,7 @@ mod sequence;
 mod table1;
 mod table2;
 mod tev;
+pub mod tev_ipc;
 mod track;
 mod validate_cornell;
 mod view;

@@ -1,8 +1,8 @@
 //! `--tev HOST:PORT`: a render shown in the tev viewer as it converges.
 
+use super::tev_ipc::TevClient;
 use std::sync::Mutex;
 use vpl_core::Image;
-use vpl_core::tev::TevClient;
 use vpl_pathtrace::Tile;
 
 /// One image in tev, fed by a render. A connection that fails mid-render
@@ -23,7 +23,7 @@ impl TevSink {
         Ok(TevSink { client: Mutex::new(Some(client)), name, failed: Mutex::new(None) })
     }
 
-    fn with(&self, send: impl FnOnce(&mut TevClient, &str) -> Result<(), vpl_core::tev::TevError>) {
+    fn with(&self, send: impl FnOnce(&mut TevClient, &str) -> Result<(), super::tev_ipc::TevError>) {
         // A poisoned lock means a sending thread panicked: stop streaming.
         let Ok(mut guard) = self.client.lock() else { return };
         if let Some(c) = guard.as_mut()

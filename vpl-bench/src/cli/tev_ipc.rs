@@ -18,8 +18,8 @@
 //!
 //! ```no_run
 //! use vpl_core::Image;
-//! use vpl_core::tev::TevClient;
-//! # fn main() -> Result<(), vpl_core::tev::TevError> {
+//! use vpl_bench::cli::tev_ipc::TevClient;
+//! # fn main() -> Result<(), vpl_bench::cli::tev_ipc::TevError> {
 //! let mut tev = TevClient::connect("127.0.0.1:14158")?;
 //! let img = Image::new(64, 48);
 //! tev.create_rgb("render", img.width, img.height)?;
@@ -28,11 +28,11 @@
 //! # }
 //! ```
 
-use crate::Image;
-use glam::Vec3;
 use std::io::Write;
 use std::net::{TcpStream, ToSocketAddrs};
 use std::time::Duration;
+use vpl_core::Image;
+use vpl_core::glam::Vec3;
 
 /// The port tev listens on unless told otherwise.
 pub const DEFAULT_PORT: u16 = 14158;

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use vpl_core::glam::Vec3;
 use vpl_core::{Image, Purpose, RngStream, SceneSetup, stream};
+use vpl_scene_io::ImageFile;
 
 /// What a fuzz target feeds the loaders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -195,7 +196,12 @@ pub fn seeds(target: Target) -> Vec<Seed> {
         Target::Toml => {
             let mut v: Vec<Seed> = ["cornell", "courtyard", "corner"]
                 .iter()
-                .map(|b| Seed { files: vec![("s.toml".into(), SceneSetup::builtin(b).expect("built-in").to_toml().into_bytes())] })
+                .map(|b| Seed {
+                    files: vec![(
+                        "s.toml".into(),
+                        vpl_scene_io::scene_toml(&SceneSetup::builtin(b).expect("built-in").description).into_bytes(),
+                    )],
+                })
                 .collect();
             v.push(Seed { files: vec![("s.toml".into(), OBJ_SCENE.as_bytes().to_vec()), cbox, cbox_mtl] });
             v
@@ -256,7 +262,12 @@ pub fn seeds(target: Target) -> Vec<Seed> {
             let cbox_mtl = ("cbox.mtl".to_string(), data("cornell-box/cbox.mtl"));
             let mut v: Vec<Seed> = ["courtyard", "corner"]
                 .iter()
-                .map(|b| Seed { files: vec![("s.toml".into(), SceneSetup::builtin(b).expect("built-in").to_toml().into_bytes())] })
+                .map(|b| Seed {
+                    files: vec![(
+                        "s.toml".into(),
+                        vpl_scene_io::scene_toml(&SceneSetup::builtin(b).expect("built-in").description).into_bytes(),
+                    )],
+                })
                 .collect();
             v.push(Seed { files: vec![("s.toml".into(), OBJ_SCENE.as_bytes().to_vec()), cbox, cbox_mtl] });
             v
@@ -267,7 +278,7 @@ pub fn seeds(target: Target) -> Vec<Seed> {
 
 /// A glTF sample of `vpl-core`'s test data.
 fn gltf_data(rel: &str) -> Vec<u8> {
-    let p = crate::data_dir().join("../../vpl-core/tests/data/gltf").join(rel);
+    let p = crate::data_dir().join("../../vpl-scene-io/tests/data/gltf").join(rel);
     std::fs::read(&p).unwrap_or_else(|e| panic!("fuzz seed {}: {e}", p.display()))
 }
 

@@ -14,6 +14,7 @@ pub mod fuzz;
 
 use std::path::PathBuf;
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, Scene, VplSet, VplVisibility};
+use vpl_scene_io::ImageFile;
 
 /// The folder of test data shipped with the repository (`tests/data`).
 pub fn data_dir() -> PathBuf {

@@ -3,7 +3,7 @@
 //! to the unclamped path tracer. Fixed seeds; each bound says why.
 
 use vpl_core::image::luminance;
-use vpl_core::{Camera, GeometryClamp, Image, Scene, SceneSetup};
+use vpl_core::{Camera, GeometryClamp, Image, Scene};
 use vpl_pathtrace::{Footprint, Mode, PathTracer, RenderSettings, render, track_with};
 use vpl_render::compensation::{Compensation, compensate};
 use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
@@ -86,7 +86,7 @@ fn a_compensated_clamped_vpl_image_converges_to_the_unclamped_path_tracer() {
     const SEEDS: u64 = 16;
     const GATHER: u32 = 4;
     for (name, size) in [("cornell", (32, 32)), ("office", (32, 24))] {
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let scene = &setup.scene;
         let camera = setup.camera.with_resolution(size).unwrap();
         let clamp = GeometryClamp::for_view(16, scene, &camera);
@@ -179,7 +179,7 @@ fn the_default_clamp_removes_at_most_five_percent_everywhere() {
         specs.extend(vpl_tests::real_scene(file).map(|p| p.to_string_lossy().into_owned()));
     }
     for spec in &specs {
-        let setup = SceneSetup::load(spec).unwrap();
+        let setup = vpl_scene_io::load(spec).unwrap();
         let (w, h) = setup.camera.resolution;
         let camera = setup.camera.with_resolution((48, (48 * h / w).max(1))).unwrap();
         let view = GeometryClamp::for_view(2048, &setup.scene, &camera);

@@ -2,6 +2,7 @@
 
 use vpl_core::SceneSetup;
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render, track};
+use vpl_scene_io::ImageFile;
 
 fn pool(n: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()
@@ -9,7 +10,7 @@ fn pool(n: usize) -> rayon::ThreadPool {
 
 #[test]
 fn render_is_bit_identical_on_one_and_two_threads() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let cam = setup.camera.with_resolution((48, 40)).unwrap();
     for mode in [Mode::Full, Mode::Indirect] {
         let pt = PathTracer::new(5, mode);
@@ -27,7 +28,7 @@ fn render_is_bit_identical_on_one_and_two_threads() {
 
 #[test]
 fn tracked_pixels_are_thread_independent_and_agree_with_mitsuba() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let pt = PathTracer::new(5, Mode::Indirect);
     let px = [(128u32, 128u32), (10, 250), (60, 90)];
     let a = pool(1).install(|| track(&setup.scene, &setup.camera, &pt, &px, 10_000, 4, 0));
@@ -47,7 +48,7 @@ fn tracked_pixels_are_thread_independent_and_agree_with_mitsuba() {
 
 #[test]
 fn clamping_removes_energy_and_an_infinite_clamp_changes_nothing() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let cam = setup.camera.with_resolution((32, 32)).unwrap();
     let s = RenderSettings { spp: 16, seed: 2, frame: 0 };
     let plain = PathTracer::new(5, Mode::Indirect);

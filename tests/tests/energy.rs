@@ -14,10 +14,10 @@ use vpl_sampling::Registry;
 /// The scenes: every built-in, then the real ones that are here.
 fn scenes() -> Vec<(String, SceneSetup)> {
     let mut scenes: Vec<(String, SceneSetup)> =
-        vpl_core::builtin::NAMES.iter().map(|n| (n.to_string(), SceneSetup::load(n).unwrap())).collect();
+        vpl_core::builtin::NAMES.iter().map(|n| (n.to_string(), vpl_scene_io::load(n).unwrap())).collect();
     for file in ["sponza-dabrovic.toml", "city-munich.toml"] {
         if let Some(path) = vpl_tests::real_scene(file) {
-            scenes.push((file.to_string(), SceneSetup::load(&path.to_string_lossy()).unwrap()));
+            scenes.push((file.to_string(), vpl_scene_io::load(&path.to_string_lossy()).unwrap()));
         }
     }
     scenes
@@ -144,7 +144,7 @@ fn the_measure_sees_the_knn_flux_too_bright() {
     let registry = Registry::builtin();
     let s = EnergySettings { checkpoints: 0, ..settings("smc-knn") };
     for name in ["cornell", "atrium"] {
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let run = measure(&registry, name, &setup, &s, &mut |_| {}).unwrap();
         let f0 = with_truth(run.frame0_ratio(), &run);
         eprintln!("{name}: kNN flux, frame 0 {:.3} ± {:.3}", f0.mean, f0.se);

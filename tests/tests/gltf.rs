@@ -3,11 +3,10 @@
 //! Fixed seeds; the bound says why.
 
 use std::path::{Path, PathBuf};
-use vpl_core::SceneSetup;
 use vpl_tests::vpl_against_path_tracer;
 
 fn gltf_data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-core/tests/data/gltf").join(p)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-scene-io/tests/data/gltf").join(p)
 }
 
 /// `Sundial.glb` (its sun, its camera, at 48×36, its materials' albedo) and `Box.gltf` under a
@@ -34,7 +33,7 @@ fn gltf_scenes_render_with_their_light_as_the_path_tracer_does() {
     .unwrap();
     let scenes = [("Sundial", gltf_data("Sundial-KHR_lights_punctual/Sundial.glb")), ("Box", box_toml)];
     for (name, path) in scenes {
-        let setup = SceneSetup::load(path.to_str().unwrap()).unwrap();
+        let setup = vpl_scene_io::load(path.to_str().unwrap()).unwrap();
         // The VPL pipeline reads the albedo only; Sundial's one smooth metal
         // ("Material", κ 0.58) would be black there and glossy in the path
         // tracer (3.6 % of the image). Both render the albedo-only scene, so

@@ -32,8 +32,8 @@ fn cbox_toml(dir: &Path) -> String {
 #[test]
 fn cbox_obj_has_the_geometry_and_materials_of_builtin_cornell() {
     let dir = scratch_dir("loaders-cbox");
-    let file = SceneSetup::load(&cbox_toml(&dir)).unwrap();
-    let builtin = SceneSetup::load("cornell").unwrap();
+    let file = vpl_scene_io::load(&cbox_toml(&dir)).unwrap();
+    let builtin = SceneSetup::builtin("cornell").unwrap();
     let (a, b) = (&file.scene.geometry.triangles, &builtin.scene.geometry.triangles);
     assert_eq!(a.len(), b.len());
     for (i, (x, y)) in a.iter().zip(b.iter()).enumerate() {
@@ -53,8 +53,8 @@ fn cbox_obj_renders_the_same_as_builtin_cornell() {
     // OBJ's vertex normals changes a path. Criterion: the per-pixel test of
     // the Mitsuba comparison (≥ 99 % at α = 0.01) and image means within 1e-4.
     let dir = scratch_dir("loaders-cbox-render");
-    let file = SceneSetup::load(&cbox_toml(&dir)).unwrap();
-    let builtin = SceneSetup::load("cornell").unwrap();
+    let file = vpl_scene_io::load(&cbox_toml(&dir)).unwrap();
+    let builtin = SceneSetup::builtin("cornell").unwrap();
     let cam = builtin.camera.with_resolution((64, 64)).unwrap();
     let pt = PathTracer::new(5, Mode::Full);
     let s = RenderSettings { spp: 64, seed: 5, frame: 0 };
@@ -70,7 +70,7 @@ fn cbox_obj_renders_the_same_as_builtin_cornell() {
 #[test]
 fn mcguire_box_negative_indices_and_trailing_comments() {
     let obj = data_dir().join("mcguire/CornellBox-Original.obj");
-    let d = vpl_core::obj::load_obj(&obj).unwrap();
+    let d = vpl_scene_io::obj::load_obj(&obj).unwrap();
     assert_eq!(d.mesh.triangles.len(), 36, "18 quads");
     let light = d.materials.iter().find(|m| m.name == "light").unwrap();
     assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
@@ -80,7 +80,7 @@ fn mcguire_box_negative_indices_and_trailing_comments() {
     // "f -4 -3 -2 -1" after the floor's four vertices: the floor quad.
     let t = d.mesh.triangles[0];
     assert_eq!(d.mesh.positions[t.v[0] as usize], Vec3::new(-1.01, 0.0, 0.99));
-    let setup = SceneSetup::load(&obj.to_string_lossy()).unwrap();
+    let setup = vpl_scene_io::load(&obj.to_string_lossy()).unwrap();
     assert_eq!(setup.scene.lights.len(), 2, "the emissive quad becomes two area lights");
 }
 
@@ -93,7 +93,7 @@ fn polygons_are_triangulated_and_zero_area_triangles_counted() {
         "p.obj",
         "mtllib p.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0.5 1.5 0\nv 0 1 0\nf 1 2 3 4 5\nv 2 0 0\nv 3 0 0\nv 4 0 0\nf -3 -2 -1\n",
     );
-    let s = SceneSetup::load(&p).unwrap();
+    let s = vpl_scene_io::load(&p).unwrap();
     assert_eq!(s.scene.geometry.triangles.len(), 3, "a pentagon is three triangles");
     assert_eq!(s.scene.stats().degenerate, 1);
     assert!(s.warnings.iter().any(|w| w.contains("1 zero-area")), "{:?}", s.warnings);
@@ -103,7 +103,7 @@ fn polygons_are_triangulated_and_zero_area_triangles_counted() {
 fn missing_mtl_gives_the_default_material_and_a_warning() {
     let dir = scratch_dir("loaders-nomtl");
     let p = write(&dir, "n.obj", "mtllib nowhere.mtl\nusemtl x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    let d = vpl_core::obj::load_obj(Path::new(&p)).unwrap();
+    let d = vpl_scene_io::obj::load_obj(Path::new(&p)).unwrap();
     assert!(d.warnings.iter().any(|w| w.contains("material library")), "{:?}", d.warnings);
     assert_eq!(d.materials, vec![vpl_core::Material::default_material()]);
     // With a light from a scene file it renders.
@@ -112,10 +112,10 @@ fn missing_mtl_gives_the_default_material_and_a_warning() {
         "n.toml",
         "[geometry]\nobj = \"n.obj\"\n[[lights]]\ntype = \"point\"\nposition = [0.2, 0.2, 1.0]\nintensity = [1, 1, 1]\n",
     );
-    let s = SceneSetup::load(&t).unwrap();
+    let s = vpl_scene_io::load(&t).unwrap();
     assert!(s.warnings.iter().any(|w| w.contains("nowhere.mtl")));
     // Without one it is a scene without lights.
-    assert!(matches!(SceneSetup::load(&p), Err(CoreError::NoLights(_))));
+    assert!(matches!(vpl_scene_io::load(&p), Err(CoreError::NoLights(_))));
 }
 
 #[test]
@@ -153,7 +153,7 @@ fn bad_inputs_are_typed_errors() {
         ("no-such-builtin".into(), |e| matches!(e, CoreError::UnknownBuiltin(_))),
     ];
     for (path, ok) in cases {
-        match SceneSetup::load(&path) {
+        match vpl_scene_io::load(&path) {
             Ok(_) => panic!("{path}: loaded"),
             Err(e) => {
                 assert!(ok(&e), "{path}: unexpected error {e:?}");
@@ -177,7 +177,7 @@ fn material_overrides_and_z_up() {
             data_dir().display()
         ),
     );
-    let s = SceneSetup::load(&t).unwrap();
+    let s = vpl_scene_io::load(&t).unwrap();
     let red = s.scene.materials.iter().find(|m| m.name == "red").unwrap();
     assert_eq!(red.albedo, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(red.layered.as_ref().unwrap().kappa, 0.5);
@@ -193,12 +193,12 @@ fn material_overrides_and_z_up() {
             data_dir().display()
         ),
     );
-    assert!(SceneSetup::load(&bad).unwrap_err().to_string().contains("nope"));
+    assert!(vpl_scene_io::load(&bad).unwrap_err().to_string().contains("nope"));
 }
 
 #[test]
 fn sequences_move_camera_and_lights() {
-    let s = SceneSetup::load("atrium").unwrap();
+    let s = SceneSetup::builtin("atrium").unwrap();
     let (a, ca) = s.frame(0).unwrap();
     let (b, cb) = s.frame(240).unwrap();
     assert_ne!(a.lights, b.lights, "the atrium light moves");
@@ -214,7 +214,7 @@ fn sequences_move_camera_and_lights() {
 fn real_scene_files_load_when_their_models_are_present() {
     for (file, triangles) in [("sponza-dabrovic.toml", 60_000), ("city-munich.toml", 30_000), ("city-munich-sky.toml", 30_000)] {
         let Some(path) = vpl_tests::real_scene(file) else { continue };
-        let setup = SceneSetup::load(path.to_str().unwrap()).unwrap();
+        let setup = vpl_scene_io::load(path.to_str().unwrap()).unwrap();
         assert!(setup.scene.geometry.triangles.len() > triangles, "{file}");
         let seq = setup.sequence.as_ref().expect("an animation");
         let last = seq.frame_count() - 1;

@@ -14,6 +14,7 @@
 
 use vpl_bench::validation::{validate_cornell, write_difference};
 use vpl_render::compare::compare;
+use vpl_scene_io::ImageFile;
 use vpl_tests::{data_dir, scratch_dir};
 
 /// Samples per pixel of our renders.
@@ -65,8 +66,8 @@ fn cornell_written_as_mitsuba_xml_renders_the_reference() {
     use vpl_core::{Image, SceneSetup};
     use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
     let dir = data_dir().join("cornell-box");
-    let xml = SceneSetup::load(dir.join("cornell.xml").to_str().unwrap()).unwrap();
-    let builtin = SceneSetup::load("cornell").unwrap();
+    let xml = vpl_scene_io::load(dir.join("cornell.xml").to_str().unwrap()).unwrap();
+    let builtin = SceneSetup::builtin("cornell").unwrap();
     let area_by_material = |s: &vpl_core::Scene| {
         let mut v: Vec<(String, f64)> = s
             .materials

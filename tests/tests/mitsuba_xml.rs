@@ -3,11 +3,10 @@
 //! same scene. Fixed seeds; the bound says why.
 
 use std::path::{Path, PathBuf};
-use vpl_core::SceneSetup;
 use vpl_tests::vpl_against_path_tracer;
 
 fn mitsuba_data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-core/tests/data/mitsuba").join(p)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../vpl-scene-io/tests/data/mitsuba").join(p)
 }
 
 /// Every Mitsuba sample: the Cornell box with spectra and with its RGB
@@ -31,7 +30,7 @@ fn mitsuba_scenes_render_with_their_light_as_the_path_tracer_does() {
         ("veach-mis-bitterli", "veach-mis-bitterli/scene.xml", (48, 27)),
     ];
     for (name, path, size) in scenes {
-        let setup = SceneSetup::load(mitsuba_data(path).to_str().unwrap()).unwrap();
+        let setup = vpl_scene_io::load(mitsuba_data(path).to_str().unwrap()).unwrap();
         // The VPL pipeline reads the albedo only; the glossy conductor
         // cubes would be black there and glossy in the path tracer. Both
         // render the albedo-only scene, so what is compared is the

@@ -12,6 +12,7 @@ use vpl_core::glam::Vec3;
 use vpl_core::{Camera, Image, Scene, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 use vpl_progressive::{Culling, Progressive, ProgressiveConfig, Techniques};
+use vpl_scene_io::ImageFile;
 use vpl_tests::data_dir;
 
 /// Per-pass images of a progressive render.
@@ -134,7 +135,7 @@ fn downsample(img: &Image, f: u32, se: bool) -> Image {
 /// the reference falls as passes accumulate.
 #[test]
 fn cornell_converges_to_the_mitsuba_reference() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((128, 128)).unwrap();
     let reference = downsample(&Image::read_exr(data_dir().join("cornell-box/reference_path_d5.exr")).unwrap(), 2, false);
     let reference_se = downsample(&Image::read_exr(data_dir().join("cornell-box/reference_path_d5_stderr.exr")).unwrap(), 2, true);
@@ -160,7 +161,7 @@ fn cornell_converges_to_the_mitsuba_reference() {
 /// tracer puts it.
 #[test]
 fn glass_matches_the_path_tracer() {
-    let setup = SceneSetup::load("glass").unwrap();
+    let setup = SceneSetup::builtin("glass").unwrap();
     let camera = setup.camera.with_resolution((64, 48)).unwrap();
     let n = (64 * 48) as usize;
     let pt = render(&setup.scene, &camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp: 4096, seed: 3, frame: 0 }, &|_, _| {})
@@ -243,7 +244,7 @@ fn glass_matches_the_path_tracer() {
 /// above shows that none is missing or doubled in expectation).
 #[test]
 fn path_classes_are_disjoint() {
-    let setup = SceneSetup::load("glass").unwrap();
+    let setup = SceneSetup::builtin("glass").unwrap();
     let camera = setup.camera.with_resolution((40, 30)).unwrap();
     let config = ProgressiveConfig { seed: 5, caustic_paths: 20_000, ..Default::default() };
     let full = Passes::render(&setup.scene, &camera, config.clone(), 4).mean_of(4);
@@ -275,7 +276,7 @@ fn path_classes_are_disjoint() {
 /// do light the image (a VPL on the floor never lights a floor point).
 #[test]
 fn unbiased_culling_keeps_the_image() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((64, 64)).unwrap();
     let n = (64 * 64) as usize;
     let all = vec![true; n];
@@ -317,7 +318,7 @@ fn unbiased_culling_keeps_the_image() {
 /// lens blurs the image (less gradient energy than the pinhole).
 #[test]
 fn thin_lens_matches_the_path_tracer() {
-    let setup = SceneSetup::load("glass").unwrap();
+    let setup = SceneSetup::builtin("glass").unwrap();
     let mut camera = setup.camera.with_resolution((48, 36)).unwrap();
     let pin =
         Passes::render(&setup.scene, &camera, ProgressiveConfig { seed: 4, caustic_paths: 5000, ..Default::default() }, 64).mean_of(64);
@@ -350,7 +351,7 @@ fn thin_lens_matches_the_path_tracer() {
 /// The same pass gives the same bits on one thread and on two.
 #[test]
 fn passes_are_deterministic_across_thread_counts() {
-    let setup = SceneSetup::load("glass").unwrap();
+    let setup = SceneSetup::builtin("glass").unwrap();
     let camera = setup.camera.with_resolution((32, 24)).unwrap();
     let config = ProgressiveConfig { seed: 3, caustic_paths: 10_000, ..Default::default() };
     let r = Progressive::new(&setup.scene, camera, config).unwrap();

@@ -7,7 +7,7 @@
 
 use rayon::ThreadPoolBuilder;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, Frame, GBuffer, Image, Light, Material, Mesh, Scene, SceneSetup, VplSampler, VplSet};
+use vpl_core::{Camera, Frame, GBuffer, Image, Light, Material, Mesh, Scene, VplSampler, VplSet};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 use vpl_render::metrics::rel_mse;
 use vpl_rr::{RrConfig, RrSampler};
@@ -21,7 +21,7 @@ use vpl_shading::render_gbuffer;
 use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 
 fn setup(name: &str, size: (u32, u32)) -> (Scene, Camera) {
-    let s = SceneSetup::load(name).unwrap();
+    let s = vpl_scene_io::load(name).unwrap();
     let c = s.camera.with_resolution(size).unwrap();
     (s.scene, c)
 }

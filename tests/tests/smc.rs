@@ -56,7 +56,7 @@ proptest! {
     #[test]
     fn at_most_m_max_slots_move_per_frame(scene_i in 0usize..4, f0 in 0u32..600, f1 in 0u32..600, m_max in 1usize..40, seed in 0u64..1000, centroid in any::<bool>()) {
         let name = ["cornell", "office", "maze", "atrium"][scene_i];
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
         let placement = if centroid { vpl_smc::Placement::Centroid } else { vpl_smc::Placement::Site };
         let mut s = SmcSampler::new(SmcConfig { vpls: 256, m_max, warmup: 2, placement, ..SmcConfig::default() }).unwrap();
@@ -108,7 +108,7 @@ fn not_indirectly_visible(scene: &Scene, camera: &Camera, set: &VplSet, size: (u
 #[test]
 fn every_vpl_is_indirectly_visible() {
     for name in ["cornell", "office"] {
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let camera = setup.camera.with_resolution((320, 180)).unwrap();
         let s = warmed(&setup.scene, &camera, 512, 100, 3);
         let set = s.vpls();
@@ -124,7 +124,7 @@ fn every_vpl_is_indirectly_visible() {
 /// I = 512 (M_max = 16 lets 100 iterations replace up to 1600 VPLs).
 #[test]
 fn intensities_even_out_over_the_warmup() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((160, 90)).unwrap();
     let mut s = smc(512, 100);
     let mut cv = Vec::new();
@@ -159,7 +159,7 @@ fn frame_to_frame_change(frames: &[Image]) -> f64 {
 /// maps, interleaved shading and the filter, the default clamp) rendered by
 /// `sampler` for `n` frames.
 fn static_frames(sampler: &mut dyn vpl_core::VplSampler, n: u64) -> (Vec<Image>, Vec<usize>) {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((96, 96)).unwrap();
     let clamp = Some(GeometryClamp::for_scene_area(1024, setup.scene.surface_area()));
     let mut vis = ShadowMaps::new(128).unwrap();
@@ -223,7 +223,7 @@ fn a_static_view_gives_a_stable_smc_image_and_a_flickering_ir_image() {
 /// the distribution is the resampled candidates' either way).
 #[test]
 fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((64, 64)).unwrap();
     let scene = &setup.scene;
     let gbuf = render_gbuffer(scene, &camera);
@@ -277,7 +277,7 @@ fn smc_energy_matches_mitsuba_and_error_falls_with_the_budget() {
 /// sparse region is low, so its VPLs carry large flux.
 #[test]
 fn newly_visible_rooms_fill_within_frames() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let scene = &setup.scene;
     let size = (64, 36);
     let a = setup.camera.looking(Vec3::new(0.0, 1.6, -2.0), Vec3::new(0.0, 1.5, -8.0)).unwrap().with_resolution(size).unwrap();
@@ -326,7 +326,7 @@ fn newly_visible_rooms_fill_within_frames() {
 /// SMC frames give the same VPLs, bit for bit, on one thread and on two.
 #[test]
 fn smc_is_bit_identical_across_thread_counts() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((80, 45)).unwrap();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -361,7 +361,7 @@ fn selection_does_not_bias_the_vpl_radiosities() {
     use vpl_core::Mode;
     use vpl_pathtrace::{PathTracer, RenderSettings, render};
     for (name, frame) in [("office", 600), ("maze", 300)] {
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let (scene, camera) = setup.frame(frame).unwrap();
         let camera = camera.with_resolution((64, 48)).unwrap();
         let gbuf = render_gbuffer(&scene, &camera);
@@ -407,7 +407,7 @@ fn the_cell_flux_matches_path_tracing_where_the_knn_flux_is_too_bright() {
     use vpl_smc::{FluxEstimator, Placement};
     let lum = |i: &Image| i.data.iter().map(|c| vpl_core::image::luminance(*c) as f64).sum::<f64>();
     for (name, size) in [("cornell", (64, 64)), ("office", (64, 48)), ("atrium", (64, 48))] {
-        let setup = SceneSetup::load(name).unwrap();
+        let setup = vpl_scene_io::load(name).unwrap();
         let camera = setup.camera.with_resolution(size).unwrap();
         let scene = &setup.scene;
         let gbuf = render_gbuffer(scene, &camera);

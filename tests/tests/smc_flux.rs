@@ -90,10 +90,10 @@ fn frames(setup: &SceneSetup) -> Vec<u32> {
 #[test]
 fn the_fluxes_sum_to_the_radiosity_integral() {
     let mut scenes: Vec<(String, SceneSetup)> =
-        vpl_core::builtin::NAMES.iter().map(|n| (n.to_string(), SceneSetup::load(n).unwrap())).collect();
+        vpl_core::builtin::NAMES.iter().map(|n| (n.to_string(), vpl_scene_io::load(n).unwrap())).collect();
     for file in ["sponza-dabrovic.toml", "city-munich.toml"] {
         if let Some(path) = vpl_tests::real_scene(file) {
-            scenes.push((file.to_string(), SceneSetup::load(&path.to_string_lossy()).unwrap()));
+            scenes.push((file.to_string(), vpl_scene_io::load(&path.to_string_lossy()).unwrap()));
         }
     }
     let mut failures = Vec::new();

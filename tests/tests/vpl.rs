@@ -13,7 +13,7 @@ use vpl_tests::{exhaustive_rt, mitsuba_indirect_64};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 fn cornell(size: u32) -> (Scene, Camera) {
-    let s = SceneSetup::load("cornell").unwrap();
+    let s = SceneSetup::builtin("cornell").unwrap();
     let c = s.camera.with_resolution((size, size)).unwrap();
     (s.scene, c)
 }
@@ -70,7 +70,7 @@ fn a_instant_radiosity_converges_to_the_mitsuba_indirect_reference() {
 /// footprint and the bias scale as 1/res).
 #[test]
 fn b_shadow_maps_agree_with_ray_casts_and_improve_with_resolution() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((96, 54)).unwrap();
     let scene = &setup.scene;
     let gbuf = render_gbuffer(scene, &camera);

@@ -8,7 +8,7 @@ use vpl_core::{Ray, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 
 fn bench(c: &mut Criterion) {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let cam = setup.camera.with_resolution((64, 64)).unwrap();
     let mut g = c.benchmark_group("pathtrace");
     for (name, mode) in [("full", Mode::Full), ("indirect", Mode::Indirect)] {
@@ -26,7 +26,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("cornell_primary_occluded", |b| b.iter(|| rays.iter().filter(|r| setup.scene.occluded(r)).count()));
     // The traversal kernels alone, one thread, on the three kinds of rays of `vpl bench-rays`.
     for name in ["cornell", "office"] {
-        let s = SceneSetup::load(name).unwrap();
+        let s = vpl_scene_io::load(name).unwrap();
         let sets = RaySets::new(&s.scene, &s.camera, (64, 64), 1);
         let bvh = &s.scene.geometry.bvh;
         for (kind, rays, closest) in [("primary", &sets.primary, true), ("diffuse", &sets.diffuse, true), ("shadow", &sets.shadow, false)] {
@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
     // One 128² paraboloid shadow map (16,384 rays from one VPL, traced in bundles), one thread.
     let mut g = c.benchmark_group("shadow_map");
     for name in ["cornell", "office"] {
-        let s = SceneSetup::load(name).unwrap();
+        let s = vpl_scene_io::load(name).unwrap();
         let set = vpl_sampling::InstantRadiosity::new(vpl_sampling::IrConfig { vpls: 64, ..Default::default() })
             .unwrap()
             .sample(&s.scene, 3)
@@ -77,7 +77,7 @@ fn bench(c: &mut Criterion) {
     // cross-bilateral filter at 640×360 on `office`, all threads.
     let mut g = c.benchmark_group("shading");
     g.sample_size(20);
-    let s = SceneSetup::load("office").unwrap();
+    let s = SceneSetup::builtin("office").unwrap();
     let camera = s.camera.with_resolution((640, 360)).unwrap();
     let gbuf = vpl_shading::render_gbuffer(&s.scene, &camera);
     let set = vpl_sampling::InstantRadiosity::new(vpl_sampling::IrConfig { vpls: 2048, ..Default::default() })

@@ -28,8 +28,8 @@ use rayon::prelude::*;
 use vpl_core::glam::Vec3;
 use vpl_core::image::luminance;
 use vpl_core::{
-    Budget, Frame, Image, IndirectShader as _, MaterialPolicy, Mode, Params, RadiosityEstimator as _, Ray, SceneSetup, Vpl, VplSampler,
-    VplSet, VplVisibility as _,
+    Budget, Frame, Image, IndirectShader as _, MaterialPolicy, Mode, Params, RadiosityEstimator as _, Ray, Vpl, VplSampler, VplSet,
+    VplVisibility as _,
 };
 use vpl_pathtrace::{Footprint, PathRadiosity, PathTracer, track_with};
 use vpl_sampling::{SmcConfig, SmcSampler};
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let params = Params::parse(args.iter().skip(3).filter(|a| a.contains('=')))?;
     let config = SmcConfig::from_params(&Budget::new(2048, 5), &params)?;
     let (w, h) = (32, 24);
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let mut smc = SmcSampler::new(config)?;
     let mut steps: Vec<u32> = (0..=target).step_by(8).collect();
     steps.extend(target.saturating_sub(32)..=target);

@@ -11,7 +11,7 @@
 //! the medians of each stage's milliseconds over those frames are printed,
 //! as `vpl bench-vpl` reports them.
 
-use vpl_core::{Budget, Params, SceneSetup};
+use vpl_core::{Budget, Params};
 use vpl_sampling::{SmcConfig, SmcSampler};
 
 fn main() {
@@ -28,7 +28,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let params = Params::parse(args.iter().skip(2))?;
     let config = SmcConfig::from_params(&Budget::default(), &params)?;
     params.check_used("smc")?;
-    let setup = SceneSetup::load(name)?;
+    let setup = vpl_scene_io::load(name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let mut smc = SmcSampler::new(config)?;
     let mut rows: Vec<[f64; 6]> = Vec::new();

@@ -18,11 +18,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 use vpl_core::image::{luminance, write_atomic};
-use vpl_core::{
-    Camera, CoreError, Frame, GBuffer, GeometryClamp, Image, IndirectShader, Mode, Scene, SceneSetup, VplSampler, VplSet, VplVisibility,
-};
+use vpl_core::{Camera, CoreError, Frame, GBuffer, GeometryClamp, Image, IndirectShader, Mode, Scene, VplSampler, VplSet, VplVisibility};
 use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_sampling::{SmcConfig, SmcSampler};
+use vpl_scene_io::ImageFile;
 use vpl_shading::{ExhaustiveShader, InterleavedShader, render_gbuffer};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
@@ -122,7 +121,7 @@ fn shade(gbuf: &GBuffer, set: &VplSet, scene: &Scene, vis: &mut dyn VplVisibilit
 /// Figs. 8 and 9 on frame `frame` of `scene_name`: writes the images and
 /// returns the panels of each figure.
 pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> Result<(Vec<Panel>, Vec<Panel>), CoreError> {
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let (scene, camera) = setup.frame(frame)?;
     let camera = camera.with_resolution(s.size)?;
     let vpls = 2048;
@@ -204,7 +203,7 @@ pub struct BudgetPoint {
 
 /// Fig. 10 on frame 0 of `scene_name`.
 pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<BudgetPoint>, CoreError> {
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let (scene, camera) = setup.frame(0)?;
     let camera = camera.with_resolution(s.fig10_size)?;
     let (pt, pt_se, _) = reference(&scene, &camera, None, s.fig10_spp, s.seed)?;

@@ -141,7 +141,7 @@ fn run(
     reference: Option<(&Image, f64)>,
     progress: &dyn Fn(&str),
 ) -> Result<(MethodFigures, Image), BenchError> {
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let clamp = GeometryClamp::for_view(s.vpls, &setup.scene, &camera);
     let mut p = spec(sampler, s, clamp).build(&Registry::builtin(), &crate::pipeline::backends(), &setup.scene)?;
@@ -173,7 +173,7 @@ fn run(
 /// `s.rr`, RR runs on `corner` with each ε of `sweep` (the rest of its
 /// settings as `s.rr`), to show how the gain depends on ε.
 pub fn georgiev(s: &GeorgievSettings, sweep: &[f32], progress: &dyn Fn(&str)) -> Result<GeorgievReport, BenchError> {
-    let setup = SceneSetup::load("corner")?;
+    let setup = SceneSetup::builtin("corner")?;
     let camera = setup.camera.with_resolution(s.size)?;
     let clamp = GeometryClamp::for_view(s.vpls, &setup.scene, &camera);
     let mut pt = PathTracer::new(5, Mode::Indirect);

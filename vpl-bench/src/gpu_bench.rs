@@ -9,7 +9,7 @@ use crate::stages::median;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
-use vpl_core::{Frame, GeometryClamp, IndirectShader, SceneSetup, VplVisibility};
+use vpl_core::{Frame, GeometryClamp, IndirectShader, VplVisibility};
 use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps, Traffic};
 use vpl_sampling::SmcConfig;
 
@@ -111,7 +111,7 @@ pub struct GpuBenchSpec<'a> {
 /// read back as a host-side renderer needs them.
 pub fn bench_scene(gpu: &Gpu, spec: &GpuBenchSpec) -> Result<GpuBenchRow, BenchError> {
     let GpuBenchSpec { scene, size, vpls, start, frames, resident, smc: place } = *spec;
-    let setup = SceneSetup::load(scene)?;
+    let setup = vpl_scene_io::load(scene)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let services = vpl_render::Backend::services(&vpl_gpu::GpuBackend::new(gpu.clone()));
     let config = SmcConfig { vpls, ..SmcConfig::default() };

@@ -168,7 +168,7 @@ pub fn line_chart_png(name: &str, chart: &Chart, series: &[Series]) -> Result<Ve
         }
         root.present().map_err(|e| draw(&e))?;
     }
-    vpl_core::image::encode_png_rgb8(w, h, &buf).map_err(|e| PlotError::Draw(name, e))
+    vpl_scene_io::encode_png_rgb8(w, h, &buf).map_err(|e| PlotError::Draw(name, e))
 }
 
 #[cfg(test)]

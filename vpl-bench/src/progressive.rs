@@ -15,9 +15,10 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, CoreError, GeometryClamp, Image, Mode, Scene, SceneSetup};
+use vpl_core::{Camera, CoreError, GeometryClamp, Image, Mode, Scene};
 use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_progressive::{Progressive, ProgressiveConfig};
+use vpl_scene_io::ImageFile;
 
 fn err(e: impl std::fmt::Display) -> CoreError {
     CoreError::Invalid(e.to_string())
@@ -84,7 +85,7 @@ pub fn inverse_difference(a: &Image, b: &Image, scale: f32) -> Image {
 /// Writes an image of values in [0, 1] as an 8-bit PNG as they are (no tone mapping).
 fn write_unit_png(img: &Image, path: &Path) -> Result<(), CoreError> {
     let rgb: Vec<u8> = img.data.iter().flat_map(|p| [p.x, p.y, p.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)).collect();
-    vpl_core::image::write_png_rgb8(path, img.width, img.height, &rgb)
+    vpl_scene_io::write_png_rgb8(path, img.width, img.height, &rgb)
 }
 
 /// A path-traced full reference (max depth 5): image, standard error, seconds.
@@ -151,7 +152,7 @@ pub struct Fig7 {
 /// `fig7.csv`, `fig7.png`, `fig7_<passes>.png` snapshots with their inverse
 /// difference images and `fig7.json` into `dir`.
 pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig7, CoreError> {
-    let setup = SceneSetup::load(&s.scene)?;
+    let setup = vpl_scene_io::load(&s.scene)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let scene = &setup.scene;
     let clamp = s.clamp_budget.map(|i| GeometryClamp::for_view(i, scene, &camera));
@@ -286,7 +287,7 @@ pub struct Fig8Row {
 
 /// Fig. 8 on one scene: both methods for `seconds` each, RMSE against the reference.
 pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn Fn(&str)) -> Result<Fig8Row, CoreError> {
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let mitsuba = s.mitsuba.as_ref().filter(|_| scene_name == "cornell").map(|d| d.join("reference_path_d5.exr")).filter(|p| p.exists());
     let (camera, reference, reference_se, source) = match mitsuba {
         Some(p) => {

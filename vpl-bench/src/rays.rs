@@ -17,7 +17,7 @@
 //! use vpl_bench::rays::{RaySets, closest_rate};
 //! use vpl_core::SceneSetup;
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let sets = RaySets::new(&setup.scene, &setup.camera, (32, 32), 1);
 //! assert_eq!(sets.primary.len(), 32 * 32);
 //! let rate = closest_rate(&setup.scene.geometry.bvh, &sets.primary, 0.01);
@@ -217,7 +217,7 @@ mod tests {
 
     #[test]
     fn ray_sets_are_the_same_on_any_thread_count() {
-        let setup = SceneSetup::load("office").unwrap();
+        let setup = SceneSetup::builtin("office").unwrap();
         let make = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -238,7 +238,7 @@ mod tests {
     /// rays hit what they hit in the original.
     #[test]
     fn side_by_side_copies_keep_the_first_view() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let tris = &setup.scene.geometry.triangles;
         let five = side_by_side(tris, 5);
         assert_eq!(five.len(), 5 * tris.len());

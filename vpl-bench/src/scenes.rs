@@ -82,7 +82,7 @@ fn lookup(file: &str, named: Option<(PathBuf, &str)>, starts: &[PathBuf]) -> Res
 /// Why the scene file at `path` cannot be loaded here: it cannot be read,
 /// or the model it names is not where it says; `None` when it can.
 pub fn model_missing(path: &Path) -> Option<String> {
-    let described = match vpl_core::SceneFile::read(path) {
+    let described = match vpl_scene_io::read_scene_file(path) {
         Ok(f) => f,
         Err(e) => return Some(format!("{}: {e}", path.display())),
     };

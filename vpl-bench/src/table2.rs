@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 use vpl_core::image::write_atomic;
-use vpl_core::{Budget, CoreError, Frame, GBuffer, GeometryClamp, SceneSetup};
+use vpl_core::{Budget, CoreError, Frame, GBuffer, GeometryClamp};
 use vpl_sampling::SmcConfig;
 
 /// The paper's Table 2 rows: scene, its stand-in here, triangles, VPLs, then
@@ -115,7 +115,7 @@ pub struct Table2Spec<'a> {
 /// maps of moved VPLs (128²) and interleaved shading with the filter.
 pub fn time_scene(spec: &Table2Spec) -> Result<(Table2Row, Option<String>), BenchError> {
     let Table2Spec { scene: scene_name, paper_scene, size, vpls, start, frames, backend, smc: place } = *spec;
-    let setup = SceneSetup::load(scene_name)?;
+    let setup = vpl_scene_io::load(scene_name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let clamp = GeometryClamp::for_view(vpls, &setup.scene, &setup.camera);
     let config = SmcConfig { vpls, ..SmcConfig::default() };

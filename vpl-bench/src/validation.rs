@@ -8,6 +8,7 @@ use crate::compare::{Comparison, compare, difference};
 use std::path::Path;
 use vpl_core::{CoreError, Image, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
+use vpl_scene_io::ImageFile;
 
 /// One mode's validation result.
 #[derive(Clone, Debug)]
@@ -42,7 +43,7 @@ pub fn validate_cornell(
     seed: u64,
     progress: &(dyn Fn(&str, u64, u64) + Sync),
 ) -> Result<Vec<ModeValidation>, CoreError> {
-    let setup = SceneSetup::load("cornell")?;
+    let setup = SceneSetup::builtin("cornell")?;
     // Every reference is read (and checked) before any rendering starts.
     let mut references = Vec::new();
     for (_, _, _, stem) in MODES {

@@ -32,7 +32,7 @@ fn spec(sampler: &str, backend: BackendKind, visibility: VisibilitySpec, vpls: u
 
 #[test]
 fn gpu_backend_renders_the_cpu_backends_frames() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let vpls = 256;
     let clamp = GeometryClamp::for_scene_area(vpls, setup.scene.surface_area());
     for (sampler, vis) in [("smc", VisibilitySpec::ShadowMaps(64)), ("ir", VisibilitySpec::RayTraced)] {

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use vpl_scene_io::ImageFile;
 
 fn vpl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_vpl"))

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use vpl_scene_io::ImageFile;
 
 fn vpl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_vpl"))
@@ -166,7 +167,7 @@ fn memory_and_threads_are_decided_before_the_work() {
     // under 256M): a 512² RGB texture (768 KiB decoded) under 512K is refused
     // naming the limit, and renders under 256M.
     let rgb = vec![200u8; 512 * 512 * 3];
-    std::fs::write(d.join("t.png"), vpl_core::image::encode_png_rgb8(512, 512, &rgb).unwrap()).unwrap();
+    std::fs::write(d.join("t.png"), vpl_scene_io::encode_png_rgb8(512, 512, &rgb).unwrap()).unwrap();
     let textured = write(
         &d,
         "t.xml",

@@ -322,11 +322,11 @@ fn picks_references_and_records(extra: &[&str]) -> Option<String> {
     // The recorded path: a scene file of office whose animation ends where the orbits left the camera.
     let text = std::fs::read_to_string(&path_file).unwrap();
     assert!(text.contains("builtin = \"office\""), "{text}");
-    let setup = vpl_core::SceneSetup::load(path_file.to_str().unwrap()).unwrap();
+    let setup = vpl_scene_io::load(path_file.to_str().unwrap()).unwrap();
     let seq = setup.sequence.as_ref().expect("the file has the animation");
     assert!(seq.camera.len() >= 2, "{} camera keys", seq.camera.len());
     let (first, last) = (seq.camera[0], *seq.camera.last().unwrap());
-    let office = vpl_core::SceneSetup::load("office").unwrap();
+    let office = vpl_core::SceneSetup::builtin("office").unwrap();
     assert!((first.origin - office.camera.origin).length() < 1e-3, "the path starts at the scene's camera");
     assert!((last.origin - first.origin).length() > 0.05 * setup.scene.radius(), "the orbits moved the camera");
     eprintln!(

@@ -33,7 +33,7 @@ pub enum CoreError {
         kind: &'static str,
     },
     /// A scene file names a file outside the scene's folder (see
-    /// [`crate::sandbox`]).
+    /// `vpl-scene-io`'s `sandbox`).
     #[error(
         "the reference '{reference}' leaves the scene's folder {root}; allow a folder that holds it to read it (--allow-outside PATH, or allow_outside)"
     )]
@@ -44,7 +44,7 @@ pub enum CoreError {
         root: PathBuf,
     },
     /// An input file is longer than the limit for its kind
-    /// (see [`crate::input`]).
+    /// (see `vpl-scene-io`'s `input`).
     #[error("{path} has {size} bytes, more than the {limit} this kind of input may have")]
     TooLarge {
         /// The file.

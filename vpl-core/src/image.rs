@@ -58,124 +58,6 @@ impl Image {
         let n = self.data.len().max(1) as f64;
         [s[0] / n, s[1] / n, s[2] / n]
     }
-
-    #[cfg(feature = "formats")]
-    /// Reads the RGB channels of the first layer of an OpenEXR file.
-    ///
-    /// The file must be a regular file of at most
-    /// [`crate::input::MAX_IMAGE_BYTES`]; its header is read first and every
-    /// layer it declares must hold at most [`crate::input::MAX_IMAGE_PIXELS`]
-    /// pixels, so a header claiming a 10⁹ × 10⁹ window is refused before any
-    /// allocation. A NaN or infinite pixel is an error naming the pixel.
-    pub fn read_exr(path: impl AsRef<Path>) -> Result<Image> {
-        let path = path.as_ref();
-        let bytes = crate::input::read_bytes(path, crate::input::MAX_IMAGE_BYTES)?;
-        Self::decode_exr(&bytes, path)
-    }
-
-    #[cfg(feature = "formats")]
-    /// Decodes the bytes of an OpenEXR file as [`Image::read_exr`] does;
-    /// `path` names it in messages.
-    pub fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image> {
-        use exr::prelude::*;
-        let bad = |reason: String| CoreError::Image(format!("{}: {reason}", path.display()));
-        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).map_err(|e| bad(e.to_string()))?;
-        for h in meta.headers.iter() {
-            let (w, hgt) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
-            if w.saturating_mul(hgt) > crate::input::MAX_IMAGE_PIXELS || w > u32::MAX as u64 || hgt > u32::MAX as u64 {
-                return Err(bad(format!("its header declares a {w} × {hgt} layer, more than {} pixels", crate::input::MAX_IMAGE_PIXELS)));
-            }
-        }
-        let img = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .rgb_channels(
-                |res, _| Self::new(res.width() as u32, res.height() as u32),
-                |img: &mut Self, pos, (r, g, b): (f32, f32, f32)| img.set(pos.x() as u32, pos.y() as u32, Vec3::new(r, g, b)),
-            )
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(bytes))
-            .map_err(|e| bad(e.to_string()))?;
-        let img = img.layer_data.channel_data.pixels;
-        if let Some(i) = img.data.iter().position(|p| !p.is_finite()) {
-            let p = img.data[i];
-            let (x, y) = (i as u32 % img.width.max(1), i as u32 / img.width.max(1));
-            return Err(CoreError::BadValue {
-                what: format!("{} pixel ({x}, {y})", path.display()),
-                reason: format!("{} {} {} is not finite", p.x, p.y, p.z),
-            });
-        }
-        Ok(img)
-    }
-
-    #[cfg(feature = "formats")]
-    /// Writes a 32-bit float RGB OpenEXR file, atomically.
-    pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
-        let path = path.as_ref();
-        let bytes = self.encode_exr().map_err(|reason| CoreError::Write { path: path.into(), reason })?;
-        write_atomic(path, &bytes)
-    }
-
-    #[cfg(feature = "formats")]
-    /// The bytes of a 32-bit float RGB OpenEXR file of this image.
-    pub fn encode_exr(&self) -> std::result::Result<Vec<u8>, String> {
-        use exr::prelude::*;
-        let layer = Layer::new(
-            (self.width as usize, self.height as usize),
-            LayerAttributes::named("rgb"),
-            Encoding::SMALL_LOSSLESS,
-            SpecificChannels::rgb(|pos: Vec2<usize>| {
-                let p = self.data[pos.y() * self.width as usize + pos.x()];
-                (p.x, p.y, p.z)
-            }),
-        );
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        exr::image::Image::from_layer(layer).write().non_parallel().to_buffered(&mut bytes).map_err(|e| e.to_string())?;
-        Ok(bytes.into_inner())
-    }
-
-    #[cfg(feature = "formats")]
-    /// Writes an 8-bit sRGB PNG of the Reinhard-tone-mapped image, atomically.
-    /// `exposure` scales radiance before tone mapping.
-    pub fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> Result<()> {
-        let path = path.as_ref();
-        let png = self.encode_png(exposure).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
-        write_atomic(path, &png)
-    }
-
-    #[cfg(feature = "formats")]
-    /// The PNG file [`Image::write_png`] writes, in memory.
-    pub fn encode_png(&self, exposure: f32) -> std::result::Result<Vec<u8>, String> {
-        let mut rgb = Vec::with_capacity(self.data.len() * 3);
-        for p in &self.data {
-            let c = linear_to_srgb(reinhard(*p * exposure));
-            rgb.extend([c.x, c.y, c.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8));
-        }
-        encode_png_rgb8(self.width, self.height, &rgb)
-    }
-}
-
-#[cfg(feature = "formats")]
-/// Writes 8-bit RGB pixels (row-major, 3 bytes a pixel) as a PNG, atomically.
-pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    let out = encode_png_rgb8(width, height, rgb).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
-    write_atomic(path, &out)
-}
-
-#[cfg(feature = "formats")]
-/// The PNG file of 8-bit RGB pixels (row-major, 3 bytes a pixel).
-pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> std::result::Result<Vec<u8>, String> {
-    let err = |e: png::EncodingError| e.to_string();
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, width, height);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc.write_header().map_err(err)?;
-        w.write_image_data(rgb).map_err(err)?;
-    }
-    Ok(out)
 }
 
 /// Luminance (Rec. 709 / sRGB primaries).
@@ -330,7 +212,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// [`begin_write`]'s guard.
 fn write_temporary(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
     let err = |reason: String| CoreError::Write { path: path.into(), reason };
-    let dir = crate::input::folder_of(path);
+    let dir = folder_of(path);
     if !dir.is_dir() {
         return Err(err(format!("directory {} does not exist", dir.display())));
     }
@@ -423,7 +305,7 @@ impl Staging {
         let mut made: Vec<PathBuf> = Vec::new();
         let mut failure = None;
         for (path, tmp) in &staged {
-            if let Err(e) = make_folder(&crate::input::folder_of(path), &mut made) {
+            if let Err(e) = make_folder(&folder_of(path), &mut made) {
                 failure = Some(CoreError::Write { path: path.clone(), reason: e.to_string() });
                 break;
             }
@@ -524,13 +406,44 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
         Ok(meta) if meta.is_file() => Ok(()),
         Ok(meta) => {
             let t = meta.file_type();
-            let kind = if t.is_symlink() { "a symbolic link" } else { crate::input::kind_of(&meta) };
+            let kind = if t.is_symlink() { "a symbolic link" } else { kind_of(&meta) };
             Err(CoreError::Write {
                 path: path.into(),
                 reason: format!("it is {kind}; an output replaces only a regular file or takes a new name"),
             })
         }
     }
+}
+
+/// The folder of `path`: its parent, or `.` for a bare name.
+pub fn folder_of(path: &Path) -> std::path::PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    }
+}
+
+/// What a path that is no regular file is, in words ("a directory", "a
+/// device", "a pipe", "a socket").
+pub fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    let t = meta.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_fifo() {
+            return "a pipe";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    "not a regular file"
 }
 
 #[cfg(test)]
@@ -578,49 +491,6 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
         assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");
         assert_eq!(names(), ["a.txt", "b.txt"]);
-    }
-
-    #[test]
-    #[cfg(feature = "formats")]
-    fn exr_round_trip_is_exact() {
-        let dir = std::env::temp_dir().join(format!("vpl-core-img-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let mut img = Image::new(5, 3);
-        for (i, p) in img.data.iter_mut().enumerate() {
-            *p = Vec3::new(i as f32 * 0.25, 1e-7 * i as f32, 1000.5 + i as f32);
-        }
-        let path = dir.join("a.exr");
-        img.write_exr(&path).unwrap();
-        assert_eq!(Image::read_exr(&path).unwrap(), img);
-        img.write_png(dir.join("a.png"), 1.0).unwrap();
-        assert!(img.write_exr(dir.join("missing/a.exr")).is_err());
-        assert!(!dir.join("missing").exists());
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    #[cfg(feature = "formats")]
-    fn hostile_exr_headers_and_pixels_are_refused() {
-        let mut img = Image::new(2, 2);
-        img.data.fill(Vec3::splat(0.5));
-        let bytes = img.encode_exr().unwrap();
-        assert_eq!(Image::decode_exr(&bytes, Path::new("a.exr")).unwrap(), img);
-        // A header that claims a 10⁹ × 10⁹ data window (box2i: xmin ymin xmax ymax).
-        let mut huge = bytes.clone();
-        let tag = b"dataWindow\0box2i\0";
-        let at = huge.windows(tag.len()).position(|w| w == tag).unwrap() + tag.len() + 4;
-        for (k, v) in [0i32, 0, 1_000_000_000, 1_000_000_000].into_iter().enumerate() {
-            huge[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
-        }
-        let e = Image::decode_exr(&huge, Path::new("huge.exr")).unwrap_err().to_string();
-        assert!(e.contains("huge.exr"), "{e}");
-        // A NaN pixel.
-        img.data[3] = Vec3::new(0.0, f32::NAN, 0.0);
-        let e = Image::decode_exr(&img.encode_exr().unwrap(), Path::new("n.exr")).unwrap_err().to_string();
-        assert!(e.contains("n.exr pixel (1, 1)") && e.contains("not finite"), "{e}");
-        // Garbage and truncation.
-        assert!(Image::decode_exr(b"not an exr", Path::new("g.exr")).is_err());
-        assert!(Image::decode_exr(&bytes[..bytes.len() / 2], Path::new("t.exr")).is_err());
     }
 
     #[test]

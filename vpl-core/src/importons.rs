@@ -122,7 +122,7 @@ mod tests {
 
     #[test]
     fn importons_lie_in_view_and_contributions_follow_the_vpl_convention() {
-        let s = SceneSetup::load("cornell").unwrap();
+        let s = SceneSetup::builtin("cornell").unwrap();
         let cam = s.camera.with_resolution((32, 32)).unwrap();
         let imp = Importons::cast(&s.scene, &cam, 64, 0, 1);
         assert_eq!(imp.cast, 64);

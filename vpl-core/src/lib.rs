@@ -1,22 +1,32 @@
 //! # vpl-core
 //!
-//! The ground every crate of the VPL toolkit stands on: rays and frames,
-//! seeded random streams, the scene (one triangle mesh, materials, lights,
-//! an 8-wide BVH built by `obvhs` with a watertight triangle test), cameras, images with EXR and PNG I/O, the OBJ and
-//! TOML loaders, the built-in scenes and their animations, and what the VPL
-//! stages share: [`Vpl`] and [`VplSet`], the [`GBuffer`], the per-frame
-//! [`Frame`], light emission sampling, and the traits [`VplSampler`],
-//! [`VplVisibility`], [`IndirectShader`] and [`RadiosityEstimator`].
+//! The vocabulary every crate of the VPL toolkit speaks. First the four
+//! stages a renderer is made of, as traits:
 //!
-//! The file formats (EXR, PNG, OBJ/MTL, TOML scene files) sit behind the
-//! default feature `formats`; with `default-features = false` the core keeps
-//! its types, the BVH and the built-in scenes and compiles about half the
-//! crates.
+//! - [`VplSampler`]: places the VPL set ([`Vpl`], [`VplSet`]) each
+//!   [`Frame`], with a [`RadiosityEstimator`] for the light a point
+//!   reflects;
+//! - [`VplVisibility`]: answers whether a VPL sees a point (shadow maps,
+//!   rays), updated incrementally as slots move;
+//! - [`IndirectShader`]: gathers the set at the receivers of a [`GBuffer`];
+//! - [`RayCaster`] and [`LightPathGenerator`]: rays and light paths in
+//!   batches, on the CPU ([`CpuRays`]) or a device ([`Services`]).
+//!
+//! Then what they share: rays and local frames, seeded random streams
+//! keyed by purpose and index, spectra and BSDFs, the scene (one triangle
+//! mesh, materials, lights, an 8-wide BVH built by `obvhs` with a
+//! watertight triangle test), cameras, the G-buffer, images, sampler
+//! parameters and statistics, budgets, the built-in scenes and their
+//! animations, and scene descriptions ([`SceneFile`], [`SceneSetup`]).
+//!
+//! No file format is read or written here: the `vpl-scene-io` crate reads
+//! scene files (TOML, OBJ/MTL, PLY, glTF, Mitsuba XML) through
+//! [`ModelLoader`] and reads and writes EXR and PNG images.
 //!
 //! ```
 //! use vpl_core::{SceneSetup, Purpose, stream};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let ray = setup.camera.ray(128.0, 128.0, (0.5, 0.5));
 //! let hit = setup.scene.intersect(&ray).expect("the tall box");
 //! assert!(hit.point.p.z < 1.0 && hit.t > 2.8);
@@ -41,8 +51,6 @@
 
 #![warn(missing_docs)]
 
-#[cfg(feature = "formats")]
-pub mod bitmap;
 pub mod bsdf;
 pub mod budget;
 pub mod builtin;
@@ -56,30 +64,18 @@ pub mod environment;
 pub mod error;
 pub mod frame;
 pub mod gbuffer;
-#[cfg(feature = "formats")]
-pub mod gltf_file;
 pub mod halton;
 pub mod image;
 pub mod importons;
-pub mod input;
 pub mod light;
 pub mod material;
 pub mod mesh;
-#[cfg(feature = "formats")]
-pub mod mitsuba;
 pub mod mode;
-#[cfg(feature = "formats")]
-pub mod mtl;
-#[cfg(feature = "formats")]
-pub mod obj;
 pub mod params;
-#[cfg(feature = "formats")]
-pub mod ply;
 pub mod ray;
 pub mod resample;
 pub mod rng;
 pub mod sampling;
-pub mod sandbox;
 pub mod scene;
 pub mod scene_file;
 pub mod sequence;
@@ -113,12 +109,11 @@ pub use mode::Mode;
 pub use params::{ParamError, ParamKey, Params};
 pub use ray::{LocalFrame, Ray};
 pub use rng::{Purpose, RngStream, stream};
-pub use sandbox::LoadOptions;
 pub use scene::{Geometry, Scene, TriangleData};
 pub use scene_file::SceneFile;
 pub use sequence::Sequence;
 pub use services::{DeviceError, DeviceSamplers, RadiosityFactory, Services, SharedEstimator};
-pub use setup::SceneSetup;
+pub use setup::{Model, ModelLoader, NoModelFiles, SceneSetup};
 pub use shadow_map::{MapView, ShadowMapSource};
 pub use stats::{Stat, Stats};
 pub use surface::{Hit, SurfacePoint};

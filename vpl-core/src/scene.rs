@@ -608,7 +608,7 @@ mod tests {
 
     #[test]
     fn visibility_through_the_cornell_box() {
-        let s = SceneSetup::load("cornell").unwrap().scene;
+        let s = SceneSetup::builtin("cornell").unwrap().scene;
         // Through the tall box (x ∈ [−0.71, 0.05], z ∈ [−0.66, 0.10], y < 0.21): blocked.
         assert!(!s.visible(Vec3::new(-0.9, 0.0, -0.3), Vec3::new(0.3, 0.0, -0.3)));
         // Above it: free.
@@ -621,7 +621,7 @@ mod tests {
     /// 59 % of these samples).
     #[test]
     fn a_light_does_not_shadow_itself() {
-        let s = SceneSetup::load("office").unwrap().scene;
+        let s = SceneSetup::builtin("office").unwrap().scene;
         let mut blocked = 0;
         for i in 0..2000 {
             let (u, v) = ((i as f32 * 0.618_034) % 1.0, (i as f32 * 0.754_877) % 1.0);

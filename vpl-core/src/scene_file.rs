@@ -2,7 +2,6 @@
 //! and an animation, in TOML (schema in DESIGN.md). Unknown keys are errors.
 
 use crate::camera::FovAxis;
-#[cfg(feature = "formats")]
 use crate::error::{CoreError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -63,7 +62,7 @@ pub struct GeometrySpec {
     pub two_sided: Option<bool>,
     /// Folders, relative to the TOML file, that the files it names (and the
     /// files those name) may lie under besides the TOML's own folder (see
-    /// [`crate::sandbox`]); as `--allow-outside` does for the command line.
+    /// `vpl-scene-io`'s `sandbox`); as `--allow-outside` does for the command line.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub allow_outside: Vec<String>,
 }
@@ -278,11 +277,12 @@ fn default_fps() -> f32 {
 }
 
 impl SceneFile {
-    /// Parses TOML text; `path` only names the file in errors.
-    #[cfg(feature = "formats")]
-    pub fn parse(text: &str, path: &Path) -> Result<SceneFile> {
-        let f: SceneFile = toml::from_str(text)
-            .map_err(|e| CoreError::SceneFile { path: path.into(), reason: e.message().replace('\n', " ").trim().to_string() })?;
+    /// Checks what the schema cannot say: exactly one geometry source,
+    /// the up axis, a positive scale, and a sequence of bounded length.
+    /// `path` names the file in errors. (`vpl-scene-io` reads the TOML
+    /// text and calls this.)
+    pub fn validate(&self, path: &Path) -> Result<()> {
+        let f = self;
         let sources = [f.geometry.obj.is_some(), f.geometry.gltf.is_some(), f.geometry.mitsuba.is_some(), f.geometry.builtin.is_some()];
         if sources.iter().filter(|&&s| s).count() != 1 {
             return Err(CoreError::SceneFile {
@@ -327,14 +327,7 @@ impl SceneFile {
                 });
             }
         }
-        Ok(f)
-    }
-
-    /// Reads and parses a file.
-    #[cfg(feature = "formats")]
-    pub fn read(path: &Path) -> Result<SceneFile> {
-        let text = crate::input::read_text(path, crate::input::MAX_TEXT_BYTES)?;
-        Self::parse(&text, path)
+        Ok(())
     }
 
     /// The description with its model paths (`obj`, `gltf`, `mitsuba`), which
@@ -352,71 +345,5 @@ impl SceneFile {
             *p = relative_path(&target, &here).unwrap_or(target).to_string_lossy().into_owned();
         }
         self
-    }
-
-    /// The TOML text of this description.
-    #[cfg(feature = "formats")]
-    pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).expect("scene descriptions always serialise")
-    }
-}
-
-#[cfg(all(test, feature = "formats"))]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn relocated_paths_lead_to_the_same_model() {
-        let text = "[geometry]\nobj = \"models/box.obj\"\n";
-        let f = SceneFile::parse(text, Path::new("x.toml")).unwrap();
-        let moved = f.clone().relocated(Path::new("/data/scenes"), Path::new("/data/out/seq"));
-        assert_eq!(moved.geometry.obj.as_deref(), Some("../../scenes/models/box.obj"));
-        let same = f.clone().relocated(Path::new("/a/./b/../c"), Path::new("/a/c"));
-        assert_eq!(same.geometry.obj.as_deref(), Some("models/box.obj"));
-        let builtin = SceneFile::parse("[geometry]\nbuiltin = \"cornell\"\n", Path::new("x.toml")).unwrap();
-        assert_eq!(builtin.clone().relocated(Path::new("/a"), Path::new("/b")), builtin);
-    }
-
-    #[test]
-    fn unknown_keys_are_errors_that_name_the_key() {
-        let p = Path::new("x.toml");
-        let ok = "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\n";
-        assert!(SceneFile::parse(ok, p).is_ok());
-        for (bad, key) in [
-            ("[geometry]\nbuiltin = \"cornell\"\ncolour = 1\n", "colour"),
-            (
-                "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"point\"\nposition = [0,1,0]\nintensity = [1,1,1]\nradius = 2\n",
-                "radius",
-            ),
-            ("[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin=[0,0,1]\ntarget=[0,0,0]\nfov=40\nzoom=2\n", "zoom"),
-            ("[geometry]\nbuiltin = \"cornell\"\n[extra]\n", "extra"),
-        ] {
-            let e = SceneFile::parse(bad, p).unwrap_err().to_string();
-            assert!(e.contains(key), "{e}");
-        }
-        assert!(SceneFile::parse("[geometry]\n", p).is_err());
-    }
-
-    /// A sequence's rate and length are finite and its frames bounded, so
-    /// no command that walks it allocates per frame without end.
-    #[test]
-    fn sequences_of_unbounded_length_are_refused() {
-        let p = Path::new("x.toml");
-        let file =
-            |fps: &str, duration: &str| format!("[geometry]\nbuiltin = \"cornell\"\n[sequence]\nfps = {fps}\nduration = {duration}\n");
-        assert!(SceneFile::parse(&file("30", "20.0"), p).is_ok());
-        assert!(SceneFile::parse(&file("30", "33000.0"), p).is_ok(), "990 001 frames are allowed");
-        for (fps, duration, says) in [
-            ("inf", "20.0", "finite"),
-            ("nan", "20.0", "finite"),
-            ("30", "1e30", "more than the 1000000"),
-            ("30", "inf", "finite"),
-            ("1e30", "1.0", "more than the 1000000"),
-            ("30", "34000.0", "more than the 1000000"),
-            ("0", "1.0", "positive"),
-        ] {
-            let e = SceneFile::parse(&file(fps, duration), p).unwrap_err().to_string();
-            assert!(e.contains(says), "fps {fps}, duration {duration}: {e}");
-        }
     }
 }

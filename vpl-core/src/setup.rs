@@ -1,12 +1,11 @@
-//! A loaded scene with its camera and animation: from a built-in name, a
-//! scene file (TOML) or a bare OBJ.
+//! A loaded scene with its camera and animation, from a built-in or from a
+//! description whose model file a [`ModelLoader`] reads (`vpl-scene-io`).
 
 use crate::builtin;
 use crate::camera::{Camera, FovAxis};
 use crate::error::{CoreError, Result};
 use crate::light::Light;
 use crate::material::{Layered, Material};
-use crate::sandbox::{LoadOptions, Sandbox};
 use crate::scene::Scene;
 use crate::scene_file::{CameraSpec, GeometrySpec, LightSpec, SceneFile, SequenceSpec};
 use crate::sequence::{CameraKey, LightKey, Sequence};
@@ -29,121 +28,47 @@ pub struct SceneSetup {
 }
 
 impl SceneSetup {
-    /// Loads `spec`: a built-in name, a `.toml` scene file, an `.obj` file or
-    /// a glTF 2.0 file (`.gltf`, `.glb`) or a Mitsuba 3 XML scene (`.xml`).
-    ///
-    /// The files a scene file names must lie in its folder; see
-    /// [`SceneSetup::load_with`] to allow more.
-    pub fn load(spec: &str) -> Result<SceneSetup> {
-        Self::load_with(spec, &LoadOptions::default())
-    }
-
-    /// [`SceneSetup::load`] with `options`: the folders besides the
-    /// scene's own that its files may name, and the memory limit of
-    /// loading (see [`crate::sandbox`]).
-    pub fn load_with(spec: &str, options: &LoadOptions) -> Result<SceneSetup> {
-        let path = Path::new(spec);
-        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-        match ext.as_deref() {
-            #[cfg(feature = "formats")]
-            Some("toml") => {
-                let file = SceneFile::read(path)?;
-                // The description the user named may widen its own sandbox.
-                let folder = path.parent().unwrap_or(Path::new("."));
-                let mut options = options.clone();
-                options.allow_outside.extend(file.geometry.allow_outside.iter().map(|r| folder.join(r)));
-                let sandbox = Sandbox::for_scene(path, &options).map_err(|e| match e {
-                    CoreError::Invalid(r) => CoreError::Invalid(r.replace("--allow-outside", "geometry.allow_outside")),
-                    e => e,
-                })?;
-                // Values the description holds are named with the file they come from.
-                Self::build(file, path.parent().unwrap_or(Path::new(".")), Some(sandbox)).map_err(|e| match e {
-                    CoreError::BadValue { what, reason } => CoreError::BadValue { what: format!("{spec}: {what}"), reason },
-                    CoreError::Invalid(s) => CoreError::Invalid(format!("{spec}: {s}")),
-                    e => e,
-                })
-            }
-            #[cfg(not(feature = "formats"))]
-            Some("toml") => Err(CoreError::Invalid(format!("{spec}: reading scene files needs vpl-core's `formats` feature"))),
-            Some(ext @ ("obj" | "gltf" | "glb" | "xml")) => {
-                let geometry = GeometrySpec {
-                    obj: (ext == "obj").then(|| spec.to_string()),
-                    gltf: (ext == "gltf" || ext == "glb").then(|| spec.to_string()),
-                    gltf_camera: None,
-                    mitsuba: (ext == "xml").then(|| spec.to_string()),
-                    mitsuba_params: Default::default(),
-                    builtin: None,
-                    up: "y".into(),
-                    scale: 1.0,
-                    two_sided: None,
-                    allow_outside: Vec::new(),
-                };
-                let file = SceneFile { geometry, camera: None, lights: None, materials: Vec::new(), sequence: None };
-                Self::build(file, Path::new(""), Some(Sandbox::for_scene(path, options)?))
-            }
-            _ if builtin::NAMES.contains(&spec) => Self::builtin(spec),
-            _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf, .glb or .xml"))),
-            _ => Err(CoreError::UnknownBuiltin(spec.to_string())),
-        }
-    }
-
-    /// A built-in scene by name.
+    /// A built-in scene by name (see [`builtin::NAMES`]). Scene files (TOML,
+    /// OBJ, glTF, Mitsuba XML) are read by the `vpl-scene-io` crate, whose
+    /// `load` takes a built-in name or a file.
     pub fn builtin(name: &str) -> Result<SceneSetup> {
         let b = builtin::build(name)?;
         let file = b.description();
-        Self::from_file(file, Path::new(""))
+        Self::from_description(file, Path::new(""), &NoModelFiles)
     }
 
-    /// Builds from a parsed description; OBJ and glTF paths are relative to
-    /// `base`.
+    /// Builds from a parsed description; the model file it names (OBJ,
+    /// glTF, Mitsuba XML; paths relative to `base`) is read by `models`
+    /// (`vpl-scene-io`'s readers, or [`NoModelFiles`] for descriptions of
+    /// built-ins).
     ///
     /// Everything the description places (the geometry, `[camera]`,
     /// `[[lights]]`, the sequence's keys, and a glTF file's own camera and
     /// lights) is in the model's frame: `geometry.up = "z"` turns all of it
     /// to the toolkit's +Y up, and `geometry.scale` scales all positions.
-    ///
-    /// The files it names must lie under `base`.
-    pub fn from_file(file: SceneFile, base: &Path) -> Result<SceneSetup> {
-        Self::build(file, base, None)
+    pub fn from_description(file: SceneFile, base: &Path, models: &dyn ModelLoader) -> Result<SceneSetup> {
+        Self::build(file, base, models)
     }
 
-    /// [`SceneSetup::from_file`] whose files may also lie where `options`
-    /// allow.
-    pub fn from_file_with(file: SceneFile, base: &Path, options: &LoadOptions) -> Result<SceneSetup> {
-        let sandbox = if file.geometry.builtin.is_some() { None } else { Some(Sandbox::for_folder(base, options)?) };
-        Self::build(file, base, sandbox)
-    }
-
-    /// Builds from `file`, reading its files through `sandbox` (the
-    /// sandbox of `base` when `None` and files are read).
-    fn build(file: SceneFile, base: &Path, sandbox: Option<Sandbox>) -> Result<SceneSetup> {
+    /// Builds from `file`, reading its model through `models`.
+    fn build(file: SceneFile, base: &Path, models: &dyn ModelLoader) -> Result<SceneSetup> {
         let mut warnings = Vec::new();
         let frame = ModelFrame::of(&file.geometry);
-        let Loaded { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, defaults, two_sided: two_sided_default } =
+        let (Model { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, two_sided: two_sided_default }, defaults) =
             if let Some(b) = &file.geometry.builtin {
                 let b = builtin::build(b)?;
                 let d = b.description();
-                Loaded {
+                let model = Model {
                     name: b.name.to_string(),
                     mesh: b.mesh,
                     materials: b.materials,
                     lights: None,
                     camera: None,
-                    defaults: Some(d),
                     two_sided: b.two_sided,
-                }
-            } else {
-                let sandbox = match sandbox {
-                    Some(s) => s,
-                    None => Sandbox::for_folder(base, &LoadOptions::default())?,
                 };
-                if file.geometry.gltf.is_some() {
-                    gltf_geometry(&file.geometry, base, &sandbox, &mut warnings)?
-                } else if file.geometry.mitsuba.is_some() {
-                    mitsuba_geometry(&file.geometry, base, &sandbox, &mut warnings)?
-                } else {
-                    obj_geometry(&file.geometry, base, &sandbox, &mut warnings)?
-                }
+                (model, Some(d))
+            } else {
+                (models.load_model(&file.geometry, base, &mut warnings)?, None)
             };
         for v in mesh.positions.iter_mut() {
             *v = frame.point(*v);
@@ -236,12 +161,6 @@ impl SceneSetup {
             }
         }
         Ok((self.scene.with_lights(lights)?, camera))
-    }
-
-    /// The scene description as TOML (what `vpl export-scene` prints).
-    #[cfg(feature = "formats")]
-    pub fn to_toml(&self) -> String {
-        self.description.to_toml()
     }
 }
 
@@ -396,34 +315,40 @@ fn framing_camera(scene: &Scene) -> Result<Camera> {
     Camera::new(c + Vec3::Z * d, c, Vec3::Y, fov, FovAxis::Smaller, (320, 240))
 }
 
-/// What a geometry source gives, in the model's frame.
-struct Loaded {
-    name: String,
-    mesh: crate::mesh::Mesh,
-    materials: Vec<Material>,
-    /// Lights the file itself holds (glTF).
-    lights: Option<Vec<LightSpec>>,
-    /// The camera the file itself holds (glTF).
-    camera: Option<CameraSpec>,
-    /// A built-in's own description.
-    defaults: Option<SceneFile>,
-    two_sided: bool,
+/// What a description's model file gives, in the model's frame.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// The scene's name (the model file's stem).
+    pub name: String,
+    /// The triangles.
+    pub mesh: crate::mesh::Mesh,
+    /// Their materials, by the mesh's material indices.
+    pub materials: Vec<Material>,
+    /// Lights the file itself holds (glTF, Mitsuba XML).
+    pub lights: Option<Vec<LightSpec>>,
+    /// The camera the file itself holds (glTF, Mitsuba XML).
+    pub camera: Option<CameraSpec>,
+    /// Whether surfaces reflect on both sides unless the description says.
+    pub two_sided: bool,
 }
 
-impl Loaded {
-    /// What a scene format that carries its own lights and camera (glTF,
-    /// Mitsuba XML) gives, read from `path`.
-    #[cfg(feature = "formats")]
-    fn scene_file(
-        path: &Path,
-        mesh: crate::mesh::Mesh,
-        materials: Vec<Material>,
-        lights: Vec<LightSpec>,
-        camera: Option<CameraSpec>,
-        two_sided: bool,
-    ) -> Loaded {
-        let lights = (!lights.is_empty()).then_some(lights);
-        Loaded { name: model_name(path), mesh, materials, lights, camera, defaults: None, two_sided }
+/// Reads the model file a description's `[geometry]` names (`obj`, `gltf`
+/// or `mitsuba`, relative to `base`); notes on what loading noticed go to
+/// `warnings`. `vpl-scene-io` implements it for its file formats, behind
+/// its sandbox and input limits.
+pub trait ModelLoader {
+    /// The model of `geometry`.
+    fn load_model(&self, geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Model>;
+}
+
+/// A [`ModelLoader`] that reads no files: descriptions of built-ins only.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoModelFiles;
+
+impl ModelLoader for NoModelFiles {
+    fn load_model(&self, geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Model> {
+        let named = [&geometry.obj, &geometry.gltf, &geometry.mitsuba].into_iter().flatten().next().cloned().unwrap_or_default();
+        Err(CoreError::Invalid(format!("{named}: reading model files needs the vpl-scene-io crate")))
     }
 }
 
@@ -523,74 +448,6 @@ impl ModelFrame {
     }
 }
 
-/// A scene's name from its model file: the file's stem.
-#[cfg(feature = "formats")]
-fn model_name(p: &Path) -> String {
-    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
-}
-
-/// The OBJ geometry of a description, in the model's frame; loading notes
-/// go to `warnings`.
-#[cfg(feature = "formats")]
-fn obj_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = sandbox.resolve(base, geometry.obj.as_deref().unwrap_or_default())?;
-    let data = crate::obj::load_obj_in(&p, sandbox)?;
-    warnings.extend(data.warnings);
-    Ok(Loaded {
-        name: model_name(&p),
-        mesh: data.mesh,
-        materials: data.materials,
-        lights: None,
-        camera: None,
-        defaults: None,
-        two_sided: true,
-    })
-}
-
-/// The glTF scene of a description, in the model's frame (glTF's own, +Y
-/// up, unless the description says otherwise), with the file's lights and
-/// camera.
-#[cfg(feature = "formats")]
-fn gltf_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = sandbox.resolve(base, geometry.gltf.as_deref().unwrap_or_default())?;
-    let data = crate::gltf_file::load_gltf_in(&p, geometry.gltf_camera.as_deref(), sandbox)?;
-    warnings.extend(data.warnings);
-    Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, true))
-}
-
-/// The Mitsuba XML scene of a description, in the model's frame (the
-/// file's own unless the description says otherwise), with its emitters,
-/// sensor and sidedness.
-#[cfg(feature = "formats")]
-fn mitsuba_geometry(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnings: &mut Vec<String>) -> Result<Loaded> {
-    let p = sandbox.resolve(base, geometry.mitsuba.as_deref().unwrap_or_default())?;
-    let params: Vec<(String, String)> = geometry.mitsuba_params.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-    let data = crate::mitsuba::load_mitsuba_in(&p, &params, sandbox)?;
-    warnings.extend(data.warnings);
-    Ok(Loaded::scene_file(&p, data.mesh, data.materials, data.lights, data.camera, data.two_sided))
-}
-
-/// Without the `formats` feature there is no Mitsuba reader.
-#[cfg(not(feature = "formats"))]
-fn mitsuba_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
-    let m = geometry.mitsuba.as_deref().unwrap_or_default();
-    Err(CoreError::Invalid(format!("{m}: reading Mitsuba XML files needs vpl-core's `formats` feature")))
-}
-
-/// Without the `formats` feature there is no OBJ reader.
-#[cfg(not(feature = "formats"))]
-fn obj_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
-    let obj = geometry.obj.as_deref().unwrap_or_default();
-    Err(CoreError::Invalid(format!("{obj}: reading OBJ files needs vpl-core's `formats` feature")))
-}
-
-/// Without the `formats` feature there is no glTF reader.
-#[cfg(not(feature = "formats"))]
-fn gltf_geometry(geometry: &GeometrySpec, _base: &Path, _sandbox: &Sandbox, _warnings: &mut Vec<String>) -> Result<Loaded> {
-    let g = geometry.gltf.as_deref().unwrap_or_default();
-    Err(CoreError::Invalid(format!("{g}: reading glTF files needs vpl-core's `formats` feature")))
-}
-
 impl builtin::Builtin {
     /// The description `vpl export-scene` writes for this built-in.
     pub fn description(&self) -> SceneFile {
@@ -628,7 +485,7 @@ mod tests {
         file.geometry.up = "z".into();
         file.geometry.scale = 2.0;
         file.sequence = None;
-        let setup = SceneSetup::from_file(file, Path::new("")).unwrap();
+        let setup = SceneSetup::from_description(file, Path::new(""), &NoModelFiles).unwrap();
         let o = Vec3::new(0.1, 2.0, -3.0);
         let g = Vec3::new(0.0, 1.0, 0.5);
         let d = Vec3::new(0.0, -1.0, 0.2).normalize();
@@ -650,11 +507,6 @@ mod tests {
         check(&setup);
         let written = setup.description.sequence.as_ref().unwrap();
         assert_ne!(Vec3::from(written.camera[0].origin), o, "the file holds the model's frame");
-        #[cfg(feature = "formats")]
-        {
-            let again = SceneFile::parse(&setup.to_toml(), Path::new("x.toml")).unwrap();
-            check(&SceneSetup::from_file(again, Path::new("")).unwrap());
-        }
     }
 
     #[test]
@@ -677,133 +529,5 @@ mod tests {
         }
         assert!(light_from_spec(&LightSpec::Directional { direction: [0.0; 3], irradiance: [1.0; 3] }).is_err());
         assert!(light_from_spec(&LightSpec::Point { position: [0.0; 3], intensity: [-1.0, 1.0, 1.0] }).is_err());
-    }
-
-    #[test]
-    #[cfg(feature = "formats")]
-    fn sun_direction_keys_turn_the_sun() {
-        let text = "[geometry]\nbuiltin = \"courtyard\"\n[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = [1, 1, 1]\n\
-                    [sequence]\nduration = 2.0\nlights = [ { light = 0, t = 0.0, direction = [0, -1, 0] }, { light = 0, t = 2.0, direction = [1, -1, 0] } ]\n";
-        let f = SceneFile::parse(text, Path::new("s.toml")).unwrap();
-        let s = SceneSetup::from_file(f, Path::new("")).unwrap();
-        let (scene, _) = s.frame(60).unwrap();
-        match &scene.lights[0] {
-            Light::Directional { direction, .. } => assert!((*direction - Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-5),
-            l => panic!("{l:?}"),
-        }
-        let bad = "[geometry]\nbuiltin = \"courtyard\"\n[sequence]\nduration = 2.0\nlights = [ { light = 3, t = 0.0 } ]\n";
-        let f = SceneFile::parse(bad, Path::new("s.toml")).unwrap();
-        assert!(SceneSetup::from_file(f, Path::new("")).unwrap_err().to_string().contains("light 3"));
-    }
-}
-
-#[cfg(all(test, feature = "formats"))]
-mod frame_tests {
-    use super::*;
-
-    /// A floor and a wall in a Z-up model, written as OBJ.
-    const Z_UP_OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv -1 1 2\nv 1 1 2\nf 1 2 3\nf 1 3 4\nf 4 3 6\nf 4 6 5\n";
-
-    fn twin_obj(text: &str) -> String {
-        // The same model turned to Y up: (x, y, z) -> (x, z, -y).
-        text.lines()
-            .map(|l| match l.strip_prefix("v ") {
-                Some(rest) => {
-                    let v: Vec<f32> = rest.split_whitespace().map(|t| t.parse().unwrap()).collect();
-                    format!("v {} {} {}", v[0], v[2], -v[1])
-                }
-                None => l.to_string(),
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
-    }
-
-    #[test]
-    fn a_z_up_scene_and_its_y_up_twin_are_the_same_scene_camera_lights_and_keys() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("z.obj"), Z_UP_OBJ).unwrap();
-        std::fs::write(dir.path().join("y.obj"), twin_obj(Z_UP_OBJ)).unwrap();
-        let z = "[geometry]\nobj = \"z.obj\"\nup = \"z\"\nscale = 2.0\n\
-                 [camera]\norigin = [0.0, -5.0, 1.0]\ntarget = [0.0, 0.0, 0.5]\nup = [0.0, 0.0, 1.0]\nfov = 50.0\n\
-                 [[lights]]\ntype = \"point\"\nposition = [0.0, 0.0, 1.5]\nintensity = [1.0, 1.0, 1.0]\n\
-                 [[lights]]\ntype = \"directional\"\ndirection = [0.0, 1.0, -1.0]\nirradiance = [1.0, 1.0, 1.0]\n\
-                 [sequence]\nduration = 1.0\ncamera = [ { t = 1.0, origin = [1.0, -5.0, 1.0], target = [0.0, 0.0, 0.5] } ]\n\
-                 lights = [ { light = 0, t = 1.0, position = [0.5, 0.0, 1.5] } ]\n";
-        let y = "[geometry]\nobj = \"y.obj\"\nscale = 2.0\n\
-                 [camera]\norigin = [0.0, 1.0, 5.0]\ntarget = [0.0, 0.5, 0.0]\nup = [0.0, 1.0, 0.0]\nfov = 50.0\n\
-                 [[lights]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [1.0, 1.0, 1.0]\n\
-                 [[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, -1.0]\nirradiance = [1.0, 1.0, 1.0]\n\
-                 [sequence]\nduration = 1.0\ncamera = [ { t = 1.0, origin = [1.0, 1.0, 5.0], target = [0.0, 0.5, 0.0] } ]\n\
-                 lights = [ { light = 0, t = 1.0, position = [0.5, 1.5, 0.0] } ]\n";
-        let load = |name: &str, text: &str| {
-            let p = dir.path().join(name);
-            std::fs::write(&p, text).unwrap();
-            SceneSetup::load(p.to_str().unwrap()).unwrap()
-        };
-        let (a, b) = (load("z.toml", z), load("y.toml", y));
-        for frame in [0, 15, 30] {
-            let ((sa, ca), (sb, cb)) = (a.frame(frame).unwrap(), b.frame(frame).unwrap());
-            assert_eq!(sa.geometry.bounds, sb.geometry.bounds);
-            assert_eq!(sa.geometry.triangles.len(), sb.geometry.triangles.len());
-            for (ta, tb) in sa.geometry.triangles.iter().zip(&sb.geometry.triangles) {
-                assert!((ta.ng - tb.ng).length() < 1e-6, "{:?} {:?}", ta.ng, tb.ng);
-            }
-            assert!((ca.origin - cb.origin).length() < 1e-5 && (ca.target - cb.target).length() < 1e-5, "{ca:?} {cb:?}");
-            assert!((ca.up - cb.up).length() < 1e-6);
-            for (la, lb) in sa.lights.iter().zip(&sb.lights) {
-                match (la, lb) {
-                    (Light::Point { position: pa, .. }, Light::Point { position: pb, .. }) => assert!((*pa - *pb).length() < 1e-5),
-                    (Light::Directional { direction: da, .. }, Light::Directional { direction: db, .. }) => {
-                        assert!((*da - *db).length() < 1e-6)
-                    }
-                    (la, lb) => panic!("{la:?} {lb:?}"),
-                }
-            }
-        }
-        // The description keeps the model's frame: exported and loaded again, the same scene.
-        let again = SceneFile::parse(&a.to_toml(), Path::new("again.toml")).unwrap();
-        let c = SceneSetup::from_file(again, dir.path()).unwrap();
-        assert_eq!(c.camera, a.camera);
-        // Without a [camera] the framing camera (found in the world) goes back to the model's frame.
-        let bare = load(
-            "bare.toml",
-            "[geometry]\nobj = \"z.obj\"\nup = \"z\"\nscale = 2.0\n[[lights]]\ntype = \"point\"\nposition = [0.0, 0.0, 1.5]\nintensity = [1.0, 1.0, 1.0]\n",
-        );
-        let again = SceneSetup::from_file(SceneFile::parse(&bare.to_toml(), Path::new("b.toml")).unwrap(), dir.path()).unwrap();
-        assert!((again.camera.origin - bare.camera.origin).length() < 1e-4, "{:?} {:?}", again.camera.origin, bare.camera.origin);
-    }
-}
-
-#[cfg(all(test, feature = "formats"))]
-mod environment_tests {
-    use super::*;
-    use crate::environment::Sky;
-
-    /// A `[[lights]]` environment with a gradient becomes the scene's
-    /// environment light, keeps its zenith at the toolkit's +Y in a Z-up
-    /// file, survives animation frames, lights a scene alone, and writes
-    /// back the same.
-    #[test]
-    fn an_environment_entry_is_the_scenes_sky() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("z.obj"), "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nf 1 2 3\n").unwrap();
-        let text = "[geometry]\nobj = \"z.obj\"\nup = \"z\"\n\
-                    [[lights]]\ntype = \"environment\"\nradiance = [0.2, 0.3, 0.9]\nhorizon = [1.0, 1.0, 1.0]\n\
-                    [sequence]\nduration = 1.0\n";
-        let p = dir.path().join("s.toml");
-        std::fs::write(&p, text).unwrap();
-        let s = SceneSetup::load(p.to_str().unwrap()).unwrap();
-        let sky = Sky { zenith: Vec3::new(0.2, 0.3, 0.9), horizon: Vec3::ONE, nadir: Vec3::ONE };
-        let i = s.scene.environment.expect("an environment light");
-        assert_eq!(s.scene.lights[i], Light::Environment { sky });
-        assert!((s.scene.environment_radiance(Vec3::Y) - sky.zenith).abs().max_element() < 1e-6);
-        let (frame, _) = s.frame(1).unwrap();
-        assert_eq!(frame.environment.map(|i| frame.lights[i].clone()), Some(Light::Environment { sky }));
-        let back = SceneFile::parse(&s.to_toml(), Path::new("back.toml")).unwrap();
-        assert_eq!(back.lights, s.description.lights);
-        // Two environments are refused.
-        let two = text.replace("[sequence]", "[[lights]]\ntype = \"environment\"\nradiance = [1.0, 1.0, 1.0]\n[sequence]");
-        std::fs::write(&p, two).unwrap();
-        assert!(SceneSetup::load(p.to_str().unwrap()).unwrap_err().to_string().contains("at most one environment"));
     }
 }

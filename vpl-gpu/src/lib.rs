@@ -64,7 +64,7 @@
 //! use vpl_gpu::{Gpu, GpuInterleavedShader, GpuShadowMaps};
 //!
 //! let gpu = Gpu::new().expect("a GPU adapter (lavapipe will do)");
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let gbuf = gpu.render_gbuffer(&setup.scene, &setup.camera).unwrap();
 //! // One VPL where the centre pixel's ray meets the scene (any sampler's set will do).
 //! let ray = setup.camera.ray(128.0, 128.0, (0.5, 0.5));

@@ -55,7 +55,7 @@ fn compare(name: &str, host: &Image, device: &Image) {
 fn emission_and_direct_light_added_on_the_device_equal_the_hosts() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let cornell = SceneSetup::load("cornell").unwrap();
+    let cornell = SceneSetup::builtin("cornell").unwrap();
     let (lo, hi) = cornell.scene.geometry.bounds;
     let c = 0.5 * (lo + hi);
     let r = cornell.scene.radius();
@@ -76,7 +76,7 @@ fn emission_and_direct_light_added_on_the_device_equal_the_hosts() {
     let mut lights = cornell.scene.lights.clone();
     lights.extend(extra);
     let lit = cornell.scene.with_lights(lights).unwrap();
-    let office = SceneSetup::load("office").unwrap();
+    let office = SceneSetup::builtin("office").unwrap();
     for (name, scene, setup) in [("cornell, every kind of light", &lit, &cornell), ("office", &office.scene, &office)] {
         let (host, on_host_device) = frame(&gpu, scene, setup, ReadBack::All);
         let (device, on_device) = frame(&gpu, scene, setup, ReadBack::Nothing);

@@ -15,7 +15,7 @@ use vpl_shading::CrossBilateral;
 #[test]
 fn gpu_filter_matches_the_cpu_filter() {
     let Some(ctx) = context() else { return };
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((64, 48)).unwrap();
     let gbuf = vpl_shading::render_gbuffer(&setup.scene, &camera);
     let mut e = Image::new(64, 48);

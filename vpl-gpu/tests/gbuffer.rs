@@ -11,12 +11,11 @@
 mod common;
 
 use common::context;
-use vpl_core::SceneSetup;
 use vpl_gpu::{GpuGBufferRenderer, GpuScene};
 
 fn check(name: &str, res: (u32, u32)) {
     let Some(ctx) = context() else { return };
-    let setup = SceneSetup::load(name).unwrap();
+    let setup = vpl_core::SceneSetup::builtin(name).unwrap();
     let scene = &setup.scene;
     let camera = setup.camera.with_resolution(res).unwrap();
     let cpu = vpl_shading::render_gbuffer(scene, &camera);

@@ -35,7 +35,7 @@ fn compare(label: &str, cpu: &Image, gpu: &Image) {
 fn gpu_interleaved_shading_matches_the_cpu_shader() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let scene = &setup.scene;
     let camera = setup.camera.with_resolution((96, 54)).unwrap();
     let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 256, ..Default::default() }).unwrap().sample(scene, 5).clone();

@@ -65,7 +65,7 @@ fn the_devices_neighbours_are_the_k_d_trees() {
     check(&gpu, "a volume", &volume, &queries);
     // Surfaces: the points a camera sees in office, a lattice of pixels
     // with ties, and queries off them.
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((80, 60)).unwrap();
     let g = gpu.render_gbuffer(&setup.scene, &camera).unwrap();
     let surface: Vec<Vec3> = g.samples.iter().filter(|s| s.hit()).map(|s| s.p).collect();

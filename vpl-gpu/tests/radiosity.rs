@@ -49,11 +49,11 @@ fn gpu_radiosity_matches_the_cpu_estimator() {
     let gpu = Gpu::from_context(ctx);
     // Area lights (cornell, office), a sun (courtyard), a moving point or spot light (atrium).
     for name in ["cornell", "office", "courtyard", "atrium"] {
-        check(&gpu, name, &SceneSetup::load(name).unwrap().scene);
+        check(&gpu, name, &vpl_core::SceneSetup::builtin(name).unwrap().scene);
     }
     // The courtyard under its sun and a sky gradient: light sampled toward
     // the sky, and paths that leave the scene weighted against it.
-    let courtyard = SceneSetup::load("courtyard").unwrap().scene;
+    let courtyard = SceneSetup::builtin("courtyard").unwrap().scene;
     let mut lights = courtyard.extra_lights();
     lights.push(Light::Environment {
         sky: Sky { zenith: Vec3::new(0.2, 0.35, 0.8), horizon: Vec3::new(0.9, 0.9, 0.85), nadir: Vec3::splat(0.1) },

@@ -48,7 +48,7 @@ fn rays(scene: &Scene, setup: &SceneSetup) -> Vec<Ray> {
 
 fn check(name: &str) {
     let Some(ctx) = context() else { return };
-    let setup = SceneSetup::load(name).unwrap();
+    let setup = vpl_core::SceneSetup::builtin(name).unwrap();
     let scene = &setup.scene;
     let gpu_scene = GpuScene::new(&ctx, scene).unwrap();
     let caster = GpuRayCaster::new(&ctx);
@@ -113,7 +113,7 @@ fn gpu_rays_match_the_cpu_bvh_on_office() {
 #[test]
 fn camera_rays_made_on_the_device_hit_what_the_host_rays_hit() {
     let Some(ctx) = context() else { return };
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let scene = &setup.scene;
     let gs = GpuScene::new(&ctx, scene).unwrap();
     let caster = GpuRayCaster::new(&ctx);
@@ -158,7 +158,7 @@ fn bounce_rays_made_on_the_device_hit_what_the_host_rays_hit() {
     use vpl_core::sampling::cosine_hemisphere;
     use vpl_core::{BounceRays, CpuRays, LocalFrame, RayCaster};
     let Some(ctx) = context() else { return };
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let scene = &setup.scene;
     let gpu = vpl_gpu::Gpu::from_context(ctx);
     let rays = vpl_gpu::GpuRays::new(gpu.clone());

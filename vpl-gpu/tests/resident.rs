@@ -74,7 +74,7 @@ fn renderer(gpu: &Gpu, setup: &SceneSetup, vpls: usize, read_back: ReadBack) -> 
 fn the_resident_image_read_on_request_equals_the_read_back_one() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((96, 72)).unwrap();
     let (mut all, _) = renderer(&gpu, &setup, 256, ReadBack::All);
     let (mut none, sampling) = renderer(&gpu, &setup, 256, ReadBack::Nothing);
@@ -99,7 +99,7 @@ fn the_resident_image_read_on_request_equals_the_read_back_one() {
 fn a_steady_1080p_smc_frame_moves_little_besides_the_sampler() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((1920, 1080)).unwrap();
     let (mut r, sampling) = renderer(&gpu, &setup, 2048, ReadBack::Nothing);
     let mut frames = Vec::new();
@@ -142,7 +142,7 @@ fn change_on_host(a: &vpl_core::Image, b: &vpl_core::Image) -> f64 {
 fn frames_left_on_the_device_are_published_and_their_change_is_reduced_there() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((200, 150)).unwrap();
     let backend = GpuBackend::new(gpu.clone());
     let frames = backend.frames();
@@ -199,7 +199,7 @@ fn frames_left_on_the_device_are_published_and_their_change_is_reduced_there() {
 fn a_steady_1080p_frame_of_smc_on_the_device_moves_only_the_vpls() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((1920, 1080)).unwrap();
     let backend = GpuBackend::new(gpu.clone());
     let mut r = Renderer::builder(&setup.scene)

@@ -19,7 +19,7 @@ use vpl_visibility::ShadowMaps;
 fn gpu_shadow_maps_match_the_cpu_maps() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let scene = &setup.scene;
     let mut set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 48, ..Default::default() }).unwrap().sample(scene, 3).clone();
     let res = 64;

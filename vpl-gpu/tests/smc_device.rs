@@ -70,7 +70,7 @@ fn run(sampler: &mut dyn VplSampler, setup: &SceneSetup, frames: &[u32], size: (
 
 /// Paired runs of the two samplers over `seeds`; `frames` of the scene's sequence.
 fn twin(gpu: &Gpu, scene: &str, vpls: usize, seeds: u64, frames: &[u32]) -> (f64, f64) {
-    let setup = SceneSetup::load(scene).unwrap();
+    let setup = vpl_core::SceneSetup::builtin(scene).unwrap();
     let size = (48, 36);
     let config = SmcConfig { vpls, m_max: vpls / 16, warmup: 20, flux: FluxEstimator::Knn, ..SmcConfig::default() };
     let (mut diffs, mut cpu_means, mut cv_diffs) = (Vec::new(), Vec::new(), Vec::new());
@@ -117,7 +117,7 @@ fn the_devices_smc_is_the_cpus_twin() {
 fn the_devices_smc_reports_relighting() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("atrium").unwrap();
+    let setup = SceneSetup::builtin("atrium").unwrap();
     let config = SmcConfig { vpls: 64, m_max: 4, warmup: 2, flux: FluxEstimator::Knn, ..SmcConfig::default() };
     let mut dev = GpuSmcSampler::new(gpu, config).unwrap();
     let empty = GBuffer::empty();
@@ -140,7 +140,7 @@ fn the_devices_smc_reports_relighting() {
 fn the_devices_smc_times_its_stages_on_the_device() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let config = SmcConfig { vpls: 128, warmup: 2, flux: FluxEstimator::Knn, ..SmcConfig::default() };
     let mut dev = GpuSmcSampler::new(gpu.clone(), config).unwrap();
     let timed = dev.profile(true);

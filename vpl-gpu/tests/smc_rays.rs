@@ -65,7 +65,7 @@ impl RayCaster for Both {
 fn smc_with_gpu_rays_takes_the_cpu_decisions() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let config = SmcConfig { vpls: 256, ..SmcConfig::default() };
     let mut cpu = SmcSampler::new(config).unwrap();
     let both = Arc::new(Both(GpuRays::new(gpu), Mutex::new([0; 4])));

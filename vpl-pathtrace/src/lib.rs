@@ -12,7 +12,7 @@
 //! use vpl_core::SceneSetup;
 //! use vpl_pathtrace::{render, Mode, PathTracer, RenderSettings};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((16, 16)).unwrap();
 //! let pt = PathTracer::new(5, Mode::Full);
 //! let out = render(&setup.scene, &camera, &pt, RenderSettings { spp: 4, seed: 1, frame: 0 }, &|_, _| {}).unwrap();

@@ -367,7 +367,7 @@ mod tests {
     /// its pixels.
     #[test]
     fn cancelling_stops_a_render_and_not_cancelling_changes_nothing() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((48, 32)).unwrap();
         let pt = PathTracer::new(5, Mode::Full);
         let s = RenderSettings { spp: 4, seed: 3, frame: 0 };
@@ -402,7 +402,7 @@ mod tests {
     /// answers [`RenderError::Cancelled`].
     #[test]
     fn cancelling_stops_tracking_and_not_cancelling_changes_nothing() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((48, 32)).unwrap();
         let pt = PathTracer::new(5, Mode::Full);
         let pixels = [(3, 4), (20, 16), (47, 31)];
@@ -434,7 +434,7 @@ mod tests {
     /// and carry its pixels: laid into an image, they are the render's.
     #[test]
     fn streamed_tiles_cover_the_image_with_its_pixels() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((40, 20)).unwrap();
         let pt = PathTracer::new(5, Mode::Full);
         let s = RenderSettings { spp: 2, seed: 9, frame: 0 };

@@ -3,7 +3,6 @@
 //! `glass`. `vpl render --method progressive` prints passes/s at full size.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use vpl_core::SceneSetup;
 use vpl_progressive::projection::{ProjectionMap, SpecularSet};
 use vpl_progressive::{Progressive, ProgressiveConfig, Techniques, specular_bounds};
 
@@ -11,7 +10,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("progressive");
     g.sample_size(20);
     for scene in ["cornell", "glass"] {
-        let setup = SceneSetup::load(scene).unwrap();
+        let setup = vpl_core::SceneSetup::builtin(scene).unwrap();
         let camera = setup.camera.with_resolution((96, 72)).unwrap();
         let r = Progressive::new(&setup.scene, camera.clone(), ProgressiveConfig::default()).unwrap();
         g.throughput(Throughput::Elements(1));

@@ -174,7 +174,7 @@ mod tests {
     /// curvature is 1/R; on its flat walls 0.
     #[test]
     fn curvature_of_a_sphere_is_one_over_r() {
-        let setup = SceneSetup::load("glass").unwrap();
+        let setup = SceneSetup::builtin("glass").unwrap();
         let scene = &setup.scene;
         let glass = scene.materials.iter().position(|m| m.name == "glass").unwrap() as u32;
         let mut seen = 0;

@@ -23,7 +23,7 @@
 //! use vpl_core::SceneSetup;
 //! use vpl_progressive::{Progressive, ProgressiveConfig};
 //!
-//! let setup = SceneSetup::load("glass").unwrap();
+//! let setup = SceneSetup::builtin("glass").unwrap();
 //! let camera = setup.camera.with_resolution((16, 12)).unwrap();
 //! let config = ProgressiveConfig { caustic_paths: 2000, ..Default::default() };
 //! let mut r = Progressive::new(&setup.scene, camera, config).unwrap();

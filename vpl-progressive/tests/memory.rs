@@ -35,7 +35,7 @@ static A: Counting = Counting;
 
 #[test]
 fn memory_does_not_grow_with_passes() {
-    let setup = SceneSetup::load("glass").unwrap();
+    let setup = SceneSetup::builtin("glass").unwrap();
     let camera = setup.camera.with_resolution((48, 36)).unwrap();
     let config = ProgressiveConfig { caustic_paths: 20_000, ..Default::default() };
     // One worker thread, so no pool threads allocate on their own schedule.

@@ -72,8 +72,8 @@ impl PyScene {
     #[pyo3(signature = (spec, allow_outside = Vec::new()))]
     fn load(py: Python<'_>, spec: &str, allow_outside: Vec<std::path::PathBuf>) -> PyResult<PyScene> {
         let spec = spec.to_string();
-        let options = vpl_render::vpl_core::LoadOptions { allow_outside, memory_limit: None };
-        let setup = py.detach(move || SceneSetup::load_with(&spec, &options)).map_err(vpl_err)?;
+        let options = vpl_scene_io::LoadOptions { allow_outside, memory_limit: None };
+        let setup = py.detach(move || vpl_scene_io::load_with(&spec, &options)).map_err(vpl_err)?;
         PyScene::at_frame(Arc::new(setup), 0)
     }
 

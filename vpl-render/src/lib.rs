@@ -29,7 +29,7 @@
 //! use vpl_core::{Mode, Params, SceneSetup};
 //! use vpl_render::{Renderer, ShadingSpec, VisibilitySpec};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((32, 32)).unwrap();
 //! let mut renderer = Renderer::builder(&setup.scene)
 //!     .vpls(64)

@@ -186,7 +186,7 @@ mod tests {
 
     #[test]
     fn the_largest_part_is_named() {
-        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
         // The case of a 2048-VPL atlas of 4096² maps: 128 GiB of maps.
         let e = MemoryEstimate::vpl_frame(&setup.scene, (640, 360), 2048, Some(4096));
         assert!(e.total() > 128 << 30 && e.items[0].driver == ["vpls", "shadowmap-res"], "{e:?}");

@@ -22,7 +22,7 @@
 //! let spec: PipelineSpec = "sampler=ir vpls=64 shading=exhaustive mode=indirect fresh-paths=false".parse().unwrap();
 //! assert_eq!(spec.shading, ShadingSpec::Exhaustive);
 //! assert_eq!(spec.to_string().parse::<PipelineSpec>().unwrap().to_string(), spec.to_string());
-//! let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+//! let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
 //! let renderer = spec.build(&Registry::builtin(), &Backends::builtin(), &setup.scene).unwrap();
 //! assert_eq!(renderer.budget().vpls, 64);
 //! ```
@@ -257,7 +257,7 @@ mod tests {
 
     #[test]
     fn a_backend_not_in_the_build_is_named_when_built() {
-        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
         let spec: PipelineSpec = "sampler=ir vpls=8 backend=abacus".parse().unwrap();
         let e = spec.build(&Registry::builtin(), &Backends::builtin(), &setup.scene).err().unwrap().to_string();
         assert!(e.contains("abacus") && e.contains("cpu"), "{e}");

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::Path;
 use vpl_core::glam::Vec3;
-use vpl_core::image::{luminance, preview_path, write_atomic};
+use vpl_core::image::{luminance, write_atomic};
 use vpl_core::{Image, SceneSetup, Stats};
 
 /// One rendered frame of a sequence.
@@ -55,17 +55,18 @@ pub fn default_tracked_pixels(w: u32, h: u32) -> Vec<(u32, u32)> {
 
 /// Renders frames `frames` of `setup`'s sequence (the still scene when it
 /// has none: then only frame 0 exists) at `size`, keeping the renderer's
-/// state from frame to frame. With `out`, writes `frame_NNNN.exr` (and a
-/// PNG preview at `exposure`) per frame, `tracked.csv` and `frames.csv`.
-/// `on_frame` sees each frame as it is done.
+/// state from frame to frame. With `out`, writes `tracked.csv` and
+/// `frames.csv` there at the end. `on_frame` sees each frame and its image
+/// as it is done (`vpl sequence` writes the images there: `vpl-scene-io`'s
+/// EXR and PNG); its error ends the run.
 pub fn run_sequence(
     setup: &SceneSetup,
     frames: Range<u32>,
     size: Option<(u32, u32)>,
     renderer: &mut Renderer,
     tracked: &[(u32, u32)],
-    out: Option<(&Path, f32)>,
-    on_frame: &mut dyn FnMut(&SequenceFrame, &Image),
+    out: Option<&Path>,
+    on_frame: &mut dyn FnMut(&SequenceFrame, &Image) -> Result<(), RenderError>,
 ) -> Result<Vec<SequenceFrame>, RenderError> {
     check_frames(setup, &frames)?;
     let fps = setup.sequence.as_ref().map_or(30.0, |s| s.fps);
@@ -90,15 +91,10 @@ pub fn run_sequence(
             rebuilt: r.visibility.rebuilt,
             stats: r.sampler_stats.clone(),
         };
-        if let Some((dir, exposure)) = out {
-            let path = dir.join(format!("frame_{f:04}.exr"));
-            r.image.write_exr(&path)?;
-            r.image.write_png(preview_path(&path), exposure)?;
-        }
-        on_frame(&frame, &r.image);
+        on_frame(&frame, &r.image)?;
         done.push(frame);
     }
-    if let Some((dir, _)) = out {
+    if let Some(dir) = out {
         write_atomic(&dir.join("tracked.csv"), tracked_csv(tracked, &done).as_bytes())?;
         write_atomic(&dir.join("frames.csv"), frames_csv(&done).as_bytes())?;
     }

@@ -10,7 +10,7 @@ use vpl_visibility::RayTraced;
 
 #[test]
 fn the_builder_renders_what_the_stages_render_by_hand() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((24, 24)).unwrap();
     let mut renderer = Renderer::builder(&setup.scene)
         .vpls(96)
@@ -48,7 +48,7 @@ fn the_builder_renders_what_the_stages_render_by_hand() {
 
 #[test]
 fn settings_are_checked_and_errors_name_the_key() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let build = |sampler: &str, params: &[&str], depth: u32| {
         Renderer::builder(&setup.scene).vpls(64).max_depth(depth).sampler(sampler).params(Params::parse(params).unwrap()).build()
     };
@@ -101,7 +101,7 @@ impl vpl_core::VplSampler for BrokenSampler {
 
 #[test]
 fn a_non_finite_vpl_fails_the_frame_naming_the_stage() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((8, 8)).unwrap();
     let sampler: Box<dyn vpl_core::VplSampler> = Box::new(BrokenSampler(vpl_core::VplSet::new(4)));
     let mut r = Renderer::builder(&setup.scene)
@@ -122,7 +122,7 @@ fn a_non_finite_vpl_fails_the_frame_naming_the_stage() {
 /// time.
 #[test]
 fn the_view_clamp_is_resolved_at_the_first_frame_and_follows_the_camera() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let near = setup.camera.with_resolution((16, 12)).unwrap();
     let far = near.looking(near.origin - near.forward() * 10.0, near.target).unwrap();
     let (g_near, g_far) = (GeometryClamp::for_view(64, &setup.scene, &near), GeometryClamp::for_view(64, &setup.scene, &far));
@@ -168,7 +168,7 @@ impl vpl_core::VplSampler for CancelsDuring<'static> {
 #[test]
 fn a_cancelled_frame_stops_and_leaves_the_renderer_in_step() {
     use std::sync::atomic::{AtomicBool, Ordering};
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let frames: Vec<_> = (0..3).map(|f| setup.frame(f * 40).unwrap()).collect();
     let smc =
         || vpl_sampling::SmcSampler::new(vpl_sampling::SmcConfig { vpls: 128, warmup: 2, ..vpl_sampling::SmcConfig::default() }).unwrap();
@@ -213,7 +213,7 @@ fn a_cancelled_frame_stops_and_leaves_the_renderer_in_step() {
 /// with that clamp. A camera that stands still keeps the clamp.
 #[test]
 fn the_auto_clamp_follows_the_view() {
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let far = setup.camera.with_resolution((24, 24)).unwrap();
     let near = far.looking(far.origin * 0.4, far.target).unwrap();
     let mut renderer = Renderer::builder(&setup.scene)

@@ -231,7 +231,7 @@ mod tests {
 
     #[test]
     fn rr_around_another_sampler_keeps_the_light() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((32, 32)).unwrap();
         let g = GBuffer::empty();
         let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index: 0, seed: 3, gbuffer: &g, previous: None };

@@ -16,7 +16,7 @@
 //! use vpl_core::{Budget, Frame, GBuffer, Params, SceneSetup, Services};
 //! use vpl_sampling::{Registry, SamplerEntry};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let mut registry = Registry::builtin();
 //! // A user's sampler: here IR with Halton paths under a name of its own.
 //! registry

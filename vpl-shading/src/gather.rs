@@ -83,7 +83,7 @@ pub(crate) fn slice(rx: &Receivers, s: usize, e: usize) -> Receivers {
 mod tests {
     use super::*;
     use vpl_core::glam::Vec3;
-    use vpl_core::{GBuffer, Scene, SceneSetup, VisibilityUpdate};
+    use vpl_core::{GBuffer, Scene, VisibilityUpdate};
     use vpl_visibility::ShadowMaps;
 
     /// Shadow maps behind a wrapper the fast path does not recognise.
@@ -118,7 +118,7 @@ mod tests {
     #[test]
     fn fused_shadow_map_loop_matches_the_generic_one() {
         for name in ["cornell", "office"] {
-            let setup = SceneSetup::load(name).unwrap();
+            let setup = vpl_core::SceneSetup::builtin(name).unwrap();
             let camera = setup.camera.with_resolution((61, 37)).unwrap();
             let gbuf: GBuffer = crate::render_gbuffer(&setup.scene, &camera);
             let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 200, ..Default::default() })

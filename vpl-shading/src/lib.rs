@@ -22,7 +22,7 @@
 //! use vpl_shading::{render_gbuffer, ExhaustiveShader};
 //! use vpl_visibility::RayTraced;
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((16, 16)).unwrap();
 //! let gbuf = render_gbuffer(&setup.scene, &camera);
 //! // One VPL where the centre pixel's ray meets the scene, facing the camera

@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use vpl_core::glam::Vec3;
 use vpl_core::{Light, MaterialPolicy, Mode, Scene, SceneSetup};
 use vpl_sampling::Registry;
+use vpl_scene_io::ImageFile;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
@@ -40,7 +41,7 @@ const PICK_RADIUS: f32 = 12.0;
 struct Wake;
 
 pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, ViewerError> {
-    let mut setup = SceneSetup::load_with(&options.scene, &options.load)?;
+    let mut setup = vpl_scene_io::load_with(&options.scene, &options.load)?;
     // The VPL pipeline draws each material's diffuse albedo.
     setup.scene = setup.scene.with_material_policy(MaterialPolicy::Diffuse);
     // The window system, before anything loads a window-system or GPU
@@ -957,7 +958,7 @@ impl State {
             self.scene_name,
             file.sequence.as_ref().map_or(0, |s| s.camera.len()),
             file.sequence.as_ref().map_or(0, |s| s.lights.len()),
-            file.to_toml()
+            vpl_scene_io::scene_toml(&file)
         );
         vpl_core::image::write_atomic(path, text.as_bytes())?;
         self.status_line = Some(format!("wrote {}", path.display()));
@@ -1372,7 +1373,7 @@ impl State {
         }
         let (w, h, rgb) = window;
         let png = with(".png");
-        vpl_core::image::write_png_rgb8(&png, w, h, &rgb)?;
+        vpl_scene_io::write_png_rgb8(&png, w, h, &rgb)?;
         let exr = with(".exr");
         match &self.composite {
             Some(c) if c.hdr.on_host() => c.hdr.write_exr(&exr)?,

@@ -75,7 +75,7 @@ mod tests {
 
     #[test]
     fn a_vpl_s_map_sees_along_its_normal_what_a_ray_sees() {
-        let setup = SceneSetup::load("cornell").unwrap();
+        let setup = SceneSetup::builtin("cornell").unwrap();
         let scene = &setup.scene;
         // Straight down from the box's middle: the floor (or a block on it),
         // which looks up at the ceiling.

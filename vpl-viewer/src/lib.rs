@@ -42,7 +42,7 @@
 //! use vpl_render::Renderer;
 //! use vpl_viewer::view::{compose, Channel, Look, Overlay, SideFrame};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((24, 24)).unwrap();
 //! let mut r = Renderer::builder(&setup.scene).vpls(16).build().unwrap();
 //! let out = r.render(&setup.scene, &camera, 0, 0.0).unwrap();
@@ -126,8 +126,8 @@ pub struct ViewerOptions {
     /// A scripted session: the viewer runs it and closes (see [`script`]).
     pub script: Option<Script>,
     /// Where the scene's files may be read from besides its folder (see
-    /// `vpl_core::sandbox`).
-    pub load: vpl_core::LoadOptions,
+    /// `vpl_scene_io::sandbox`).
+    pub load: vpl_scene_io::LoadOptions,
 }
 
 impl ViewerOptions {

@@ -27,7 +27,7 @@ fn gpu() -> Option<Gpu> {
 #[test]
 fn the_device_composite_is_the_host_composite() {
     let Some(gpu) = gpu() else { return };
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let camera = setup.camera.with_resolution((161, 97)).unwrap();
     let mut sides = Vec::new();
     for sampler in ["smc", "ir"] {
@@ -112,7 +112,7 @@ fn the_device_composite_is_the_host_composite() {
 #[test]
 fn composing_reads_nothing_back_and_takes_one_submission() {
     let Some(gpu) = gpu() else { return };
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((64, 48)).unwrap();
     let backend = GpuBackend::new(gpu.clone());
     let frames = backend.frames();
@@ -143,7 +143,7 @@ fn a_split_with_a_side_on_the_host_comes_back_whole() {
     use std::sync::{Arc, mpsc};
     use vpl_viewer::worker::{self, BackendChoice, Job, Reply, SideSpec};
     let Some(gpu) = gpu() else { return };
-    let setup = SceneSetup::load("cornell").unwrap();
+    let setup = SceneSetup::builtin("cornell").unwrap();
     let camera = setup.camera.with_resolution((48, 36)).unwrap();
     let (jobs, job_rx) = mpsc::channel();
     let (reply_tx, replies) = mpsc::channel();

@@ -16,7 +16,7 @@
 //! use vpl_core::glam::Vec3;
 //! use vpl_visibility::{RayTraced, ShadowMaps};
 //!
-//! let scene = SceneSetup::load("cornell").unwrap().scene;
+//! let scene = SceneSetup::builtin("cornell").unwrap().scene;
 //! let mut set = VplSet::new(1);
 //! set.set(0, Some(Vpl { y: Vec3::new(0.0, 0.99, 0.0), n: -Vec3::Y, flux: Vec3::ONE, id: 0, bounce: 1 }));
 //! let mut maps = ShadowMaps::new(64).unwrap();

@@ -238,7 +238,7 @@ mod tests {
 
     #[test]
     fn only_moved_vpls_rebuild_and_memory_is_counted() {
-        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let scene = SceneSetup::builtin("cornell").unwrap().scene;
         let mut set = VplSet::new(3);
         set.set(0, Some(vpl(Vec3::new(0.0, 0.99, 0.0), -Vec3::Y)));
         set.set(1, Some(vpl(Vec3::new(0.5, -1.0, 0.5), Vec3::Y)));

@@ -45,11 +45,11 @@ const REAL_SCENES: [(&str, &str, &str); 10] = [
     ("munich-sky", "Munich city blocks, the sun and a sky", "scenes/city-munich-sky.toml"),
     ("cornell-xml", "Mitsuba's Cornell box written as Mitsuba XML (analytic shapes)", "tests/data/cornell-box/cornell.xml"),
     ("mcguire", "McGuire's Cornell box (OBJ + MTL)", "tests/data/mcguire/CornellBox-Original.obj"),
-    ("sundial", "Sundial (glTF binary, KHR_lights_punctual sun)", "vpl-core/tests/data/gltf/Sundial-KHR_lights_punctual/Sundial.glb"),
-    ("mitsuba-cbox", "Mitsuba's cbox.xml (spectral reflectances and light)", "vpl-core/tests/data/mitsuba/cbox-mitsuba-data/cbox.xml"),
-    ("mitsuba-tutorials", "Mitsuba tutorials' box: a mirror and a glass sphere", "vpl-core/tests/data/mitsuba/cbox-tutorials/cbox.xml"),
-    ("veach-mis", "Veach's MIS scene (Mitsuba data)", "vpl-core/tests/data/mitsuba/veach-mis-mitsuba-data/veach_mis.xml"),
-    ("veach-mis-bitterli", "Veach's MIS scene (Bitterli's resources)", "vpl-core/tests/data/mitsuba/veach-mis-bitterli/scene.xml"),
+    ("sundial", "Sundial (glTF binary, KHR_lights_punctual sun)", "vpl-scene-io/tests/data/gltf/Sundial-KHR_lights_punctual/Sundial.glb"),
+    ("mitsuba-cbox", "Mitsuba's cbox.xml (spectral reflectances and light)", "vpl-scene-io/tests/data/mitsuba/cbox-mitsuba-data/cbox.xml"),
+    ("mitsuba-tutorials", "Mitsuba tutorials' box: a mirror and a glass sphere", "vpl-scene-io/tests/data/mitsuba/cbox-tutorials/cbox.xml"),
+    ("veach-mis", "Veach's MIS scene (Mitsuba data)", "vpl-scene-io/tests/data/mitsuba/veach-mis-mitsuba-data/veach_mis.xml"),
+    ("veach-mis-bitterli", "Veach's MIS scene (Bitterli's resources)", "vpl-scene-io/tests/data/mitsuba/veach-mis-bitterli/scene.xml"),
 ];
 
 /// Renders each of [`REAL_SCENES`] by the path tracer and by SMC into

@@ -6,7 +6,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     use vpl_render::{Renderer, VisibilitySpec};
 
     let registry = my_vpl_experiment::registry();
-    let setup = SceneSetup::load("office")?;
+    let setup = SceneSetup::builtin("office")?;
     for sampler in ["uniform-area", "smc"] {
         let mut renderer = Renderer::builder(&setup.scene)
             .registry(&registry)

@@ -16,7 +16,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let registry = Registry::builtin().with(UniformArea::entry())?;
 
     // Through the library: four frames of office's walk, 256 VPLs, shadow maps.
-    let setup = SceneSetup::load("office")?;
+    let setup = SceneSetup::builtin("office")?;
     for (sampler, params) in [("uniform-area", vec![]), ("rr", vec!["candidates=uniform-area", "rr-pilot=true"])] {
         let mut renderer = Renderer::builder(&setup.scene)
             .registry(&registry)

@@ -78,7 +78,7 @@ mod tests {
         use vpl_render::Clamp;
         assert_eq!("off".parse::<Clamp>().unwrap(), Clamp::Off);
         assert_eq!("2.5".parse::<Clamp>().unwrap(), Clamp::Value(vpl_core::GeometryClamp::new(2.5)));
-        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
         let (scene, camera) = (&setup.scene, &setup.camera);
         // `area`, the flag's first spelling, still reads as `scene-area`.
         for area in ["area", "scene-area"] {

@@ -52,7 +52,7 @@ fn bench_gpu(args: Args) -> Res<()> {
     let places: Vec<crate::gpu_bench::SmcPlace> =
         smc.iter().map(|s| s.parse().map_err(|e| format!("--smc: {e}"))).collect::<Result<_, _>>()?;
     for s in &scenes {
-        SceneSetup::load(s).map_err(|e| format!("--scene: {e}"))?;
+        vpl_scene_io::load(s).map_err(|e| format!("--scene: {e}"))?;
     }
     let pool = pool(threads)?;
     let gpu = vpl_gpu::Gpu::new().map_err(|e| e.to_string())?;

@@ -23,7 +23,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         return Err("--spp and --repeat must be at least 1".into());
     }
     let pool = pool(threads)?;
-    let setup = SceneSetup::load("cornell").map_err(|e| e.to_string())?;
+    let setup = SceneSetup::builtin("cornell").map_err(|e| e.to_string())?;
     let pt = PathTracer::new(5, Mode::Full);
     let mut rates = Vec::new();
     // One warm-up render, then the timed ones.

@@ -60,7 +60,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     let last = scenes.len() - 1;
     for (i, spec) in scenes.iter().enumerate() {
-        let setup = SceneSetup::load(spec).map_err(|e| e.to_string())?;
+        let setup = vpl_scene_io::load(spec).map_err(|e| e.to_string())?;
         let name = setup.scene.name.clone();
         let tris = &setup.scene.geometry.triangles;
         let sets = pool.install(|| RaySets::new(&setup.scene, &setup.camera, (size.0, size.1), 1));

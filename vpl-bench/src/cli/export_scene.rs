@@ -15,6 +15,6 @@ pub(super) struct Args {
 /// Runs `vpl export-scene`.
 pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     let Args { name, out } = args;
-    let setup = SceneSetup::load(&name).map_err(|e| e.to_string())?;
-    emit(out.as_deref(), &setup.to_toml())
+    let setup = vpl_scene_io::load(&name).map_err(|e| e.to_string())?;
+    emit(out.as_deref(), &vpl_scene_io::scene_toml(&setup.description))
 }

@@ -75,7 +75,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         return Err(format!("--only: no figure {bad} (8 or 10)"));
     }
     for sc in scenes.iter().chain(&fig10_scenes) {
-        SceneSetup::load(sc).map_err(|e| e.to_string())?;
+        vpl_scene_io::load(sc).map_err(|e| e.to_string())?;
     }
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;

@@ -2,6 +2,7 @@
 //! efficiency gain over IR at equal stored VPLs (and RR's acceptance on cornell, office).
 
 use super::*;
+use vpl_scene_io::ImageFile;
 
 /// Reproduce Georgiev & Slusallek's claims on `corner`: RR's mean acceptance and its
 /// efficiency gain over IR at equal stored VPLs (and RR's acceptance on cornell, office).

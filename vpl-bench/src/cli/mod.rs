@@ -170,18 +170,18 @@ struct SceneArgs {
 /// the memory limit its loading keeps to.
 pub(crate) struct SceneSource {
     spec: String,
-    options: vpl_core::LoadOptions,
+    options: vpl_scene_io::LoadOptions,
 }
 
 impl SceneSource {
     fn new(spec: String, allow_outside: Vec<PathBuf>, memory: Option<MemoryArg>) -> SceneSource {
-        let options = vpl_core::LoadOptions { allow_outside, memory_limit: Some(memory_limit(memory).0) };
+        let options = vpl_scene_io::LoadOptions { allow_outside, memory_limit: Some(memory_limit(memory).0) };
         SceneSource { spec, options }
     }
 
     /// The scene, loaded within its sandbox and memory limit.
     fn load(&self) -> Res<SceneSetup> {
-        SceneSetup::load_with(&self.spec, &self.options).map_err(|e| e.to_string())
+        vpl_scene_io::load_with(&self.spec, &self.options).map_err(|e| e.to_string())
     }
 }
 
@@ -493,7 +493,7 @@ fn memory_line(estimate: &vpl_render::MemoryEstimate) -> String {
 
 /// Fails early, before any work, if `path` cannot be written.
 fn check_writable(path: &Path) -> Res<()> {
-    let dir = vpl_core::input::folder_of(path);
+    let dir = vpl_scene_io::input::folder_of(path);
     if !dir.is_dir() {
         return Err(format!("cannot write {}: directory {} does not exist", path.display(), dir.display()));
     }

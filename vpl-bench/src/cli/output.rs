@@ -14,6 +14,7 @@ use super::Res;
 use std::path::{Path, PathBuf};
 use vpl_core::Image;
 use vpl_core::image::preview_path;
+use vpl_scene_io::ImageFile;
 
 /// An image output and, for `.exr`, its PNG preview.
 #[derive(Clone, Debug)]

@@ -91,7 +91,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         return Err(format!("--only: no figure {bad} (7 or 8)"));
     }
     for sc in std::iter::once(&fig7_scene).chain(&fig8_scenes) {
-        SceneSetup::load(sc).map_err(|e| e.to_string())?;
+        vpl_scene_io::load(sc).map_err(|e| e.to_string())?;
     }
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;

@@ -2,6 +2,7 @@
 
 use super::tev::TevSink;
 use super::*;
+use vpl_scene_io::ImageFile;
 
 /// Render one frame of a scene.
 #[derive(clap::Args)]

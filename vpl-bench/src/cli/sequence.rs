@@ -2,6 +2,7 @@
 //! frame: one EXR (and PNG preview) per frame, tracked.csv (tracked pixels) and frames.csv (timings).
 
 use super::*;
+use vpl_scene_io::ImageFile;
 
 /// Render frames of a scene's sequence with VPLs, the sampler keeping its state from frame to
 /// frame: one EXR (and PNG preview) per frame, tracked.csv (tracked pixels) and frames.csv (timings).
@@ -112,10 +113,14 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
                 size.map(|s| (s.0, s.1)),
                 &mut p,
                 &tracked,
-                Some((dir.path(), exposure)),
-                &mut |f, _| {
+                Some(dir.path()),
+                &mut |f, image| {
+                    let path = dir.path().join(format!("frame_{:04}.exr", f.index));
+                    image.write_exr(&path)?;
+                    image.write_png(vpl_core::image::preview_path(&path), exposure)?;
                     bar.set_message(format!("{:.0} ms, {} VPLs moved", f.timings.total_ms, f.moved));
                     bar.inc(1);
+                    Ok(())
                 },
             )
         })

@@ -1,6 +1,7 @@
 //! `vpl validate-cornell`: Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
 
 use super::*;
+use vpl_scene_io::ImageFile;
 
 /// Compare the path tracer with the Mitsuba 3 references of `cornell`; write a Markdown report.
 #[derive(clap::Args)]

@@ -93,7 +93,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         exposure,
         reference,
         script,
-        load: vpl_core::LoadOptions { allow_outside, memory_limit: None },
+        load: vpl_scene_io::LoadOptions { allow_outside, memory_limit: None },
     };
     let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
     if !quiet {

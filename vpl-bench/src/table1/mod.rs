@@ -508,8 +508,8 @@ pub struct RunSummary {
 }
 
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, Table1Error> {
-    let text =
-        vpl_core::input::read_text(path, vpl_core::input::MAX_TEXT_BYTES).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))?;
+    let text = vpl_scene_io::input::read_text(path, vpl_scene_io::input::MAX_TEXT_BYTES)
+        .map_err(|e| Table1Error::Unit(path.into(), e.to_string()))?;
     serde_json::from_str(&text).map_err(|e| Table1Error::Unit(path.into(), e.to_string()))
 }
 
@@ -636,6 +636,7 @@ fn run_method(
     let frames = run_sequence(&setup, run.start..run.end, Some(spec.size), &mut renderer, &row.pixels(spec.size), None, &mut |_, _| {
         k += 1;
         on_frame(k);
+        Ok(())
     })
     .map_err(|e| Table1Error::Invalid(e.to_string()))?;
     let mut u = MethodUnit {
@@ -900,7 +901,7 @@ mod tests {
         let spec = Table1Spec::quick();
         let p = pipeline_spec(&spec, "smc:flux=voronoi-site", 64, 0).unwrap();
         assert_eq!(p.sampler, "smc");
-        let scene = vpl_core::SceneSetup::load("cornell").unwrap().scene;
+        let scene = vpl_core::SceneSetup::builtin("cornell").unwrap().scene;
         assert!(p.build(&Registry::builtin(), &crate::pipeline::backends(), &scene).is_ok());
         let bad = pipeline_spec(&spec, "ir:flux=knn", 64, 0).unwrap();
         assert!(bad.build(&Registry::builtin(), &crate::pipeline::backends(), &scene).is_err());

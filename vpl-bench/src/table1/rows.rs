@@ -278,7 +278,7 @@ impl Row {
             if let Some(why) = crate::scenes::model_missing(&path) {
                 return Err(CoreError::Invalid(format!("sequence {}: {why}", self.id)));
             }
-            return SceneSetup::load(&path.to_string_lossy());
+            return vpl_scene_io::load(&path.to_string_lossy());
         }
         let setup = SceneSetup::builtin(self.scene)?;
         if self.sun_keys.is_empty() {

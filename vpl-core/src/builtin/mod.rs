@@ -166,20 +166,4 @@ mod tests {
             s.frame(last).unwrap();
         }
     }
-
-    #[test]
-    #[cfg(feature = "formats")]
-    fn every_builtin_exports_and_loads_again() {
-        for name in NAMES {
-            let s = SceneSetup::builtin(name).unwrap();
-            // Export and load again: same scene description.
-            let toml = s.to_toml();
-            let f = crate::scene_file::SceneFile::parse(&toml, std::path::Path::new("x.toml")).unwrap();
-            let again = SceneSetup::from_file(f, std::path::Path::new("")).unwrap();
-            assert_eq!(again.scene.materials, s.scene.materials, "{name}");
-            assert_eq!(again.scene.lights, s.scene.lights, "{name}");
-            assert_eq!(again.camera, s.camera, "{name}");
-            assert_eq!(again.sequence, s.sequence, "{name}");
-        }
-    }
 }

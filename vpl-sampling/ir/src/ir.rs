@@ -334,7 +334,7 @@ mod tests {
 
     #[test]
     fn static_scene_gives_the_same_vpls_and_no_changes() {
-        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let scene = SceneSetup::builtin("cornell").unwrap().scene;
         for sampling in [PathSampling::Random, PathSampling::Halton] {
             let mut ir = InstantRadiosity::new(IrConfig { vpls: 512, bounces: 3, sampling, fresh_paths: false }).unwrap();
             let a = ir.sample(&scene, 5).clone();
@@ -357,7 +357,7 @@ mod tests {
 
     #[test]
     fn bounce_counts_follow_the_plan() {
-        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let scene = SceneSetup::builtin("cornell").unwrap().scene;
         let mut ir =
             InstantRadiosity::new(IrConfig { vpls: 1000, bounces: 2, sampling: PathSampling::Halton, fresh_paths: false }).unwrap();
         let set = ir.sample(&scene, 1);

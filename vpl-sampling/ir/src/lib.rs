@@ -23,7 +23,7 @@
 //! use vpl_core::{Frame, GBuffer, SceneSetup, VplSampler};
 //! use vpl_ir::{InstantRadiosity, IrConfig};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let gbuffer = GBuffer::empty();
 //! let frame = Frame { scene: &setup.scene, camera: &setup.camera, time: 0.0, index: 0, seed: 1, gbuffer: &gbuffer, previous: None };
 //! let mut ir = InstantRadiosity::new(IrConfig { vpls: 256, ..IrConfig::default() }).unwrap();

@@ -23,7 +23,7 @@
 //! use vpl_core::{Frame, GBuffer, SceneSetup, VplSampler};
 //! use vpl_mir::{MirConfig, MirSampler};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((32, 32)).unwrap();
 //! let gbuffer = GBuffer::empty();
 //! let frame = Frame { scene: &setup.scene, camera: &camera, time: 0.0, index: 0, seed: 1, gbuffer: &gbuffer, previous: None };

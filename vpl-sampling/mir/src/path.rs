@@ -72,7 +72,7 @@ mod tests {
     /// z-test on 20 000 paths against 16 IR sets, |z| < 4.
     #[test]
     fn uniform_paths_carry_the_light_field_of_instant_radiosity() {
-        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let scene = SceneSetup::builtin("cornell").unwrap().scene;
         let mut u = vec![0.0; dims(3)];
         let n = 20_000u64;
         let xs: Vec<f64> = (0..n)

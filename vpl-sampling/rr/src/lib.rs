@@ -32,7 +32,7 @@
 //! use vpl_core::{Frame, GBuffer, SceneSetup, VplSampler};
 //! use vpl_rr::{RrConfig, RrSampler};
 //!
-//! let setup = SceneSetup::load("corner").unwrap();
+//! let setup = SceneSetup::builtin("corner").unwrap();
 //! let camera = setup.camera.with_resolution((32, 24)).unwrap();
 //! let gbuffer = GBuffer::empty();
 //! let frame = |index| Frame { scene: &setup.scene, camera: &camera, time: 0.0, index, seed: 3, gbuffer: &gbuffer, previous: None };

@@ -31,7 +31,7 @@ fn shade(scene: &Scene, camera: &Camera, vpls: &VplSet, clamp: GeometryClamp) ->
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let setup = SceneSetup::load("office")?;
+    let setup = SceneSetup::builtin("office")?;
     let vpls = 256;
     let mut smc = SmcSampler::new(SmcConfig { vpls, warmup: 20, m_max: 8, ..SmcConfig::default() })?;
     // The toolkit's default clamp, from the view of the first frame.

@@ -17,7 +17,7 @@ fn main() {
     let d = SmcConfig::default();
     let probes_per_vpl = args.next().and_then(|a| a.parse().ok()).unwrap_or(d.probes_per_vpl);
     let probe_iterations = args.next().and_then(|a| a.parse().ok()).unwrap_or(d.probe_iterations);
-    let setup = SceneSetup::load("office").expect("a built-in scene");
+    let setup = SceneSetup::builtin("office").expect("a built-in scene");
     let mut smc = SmcSampler::new(SmcConfig { flux, probes_per_vpl, probe_iterations, ..d }).expect("valid settings");
     let frame = |f: u32| {
         let (scene, camera) = setup.frame(300 + f).expect("a frame of the sequence");

@@ -61,7 +61,7 @@
 //! use vpl_core::{Frame, GBuffer, SceneSetup, VplSampler};
 //! use vpl_smc::{SmcConfig, SmcSampler};
 //!
-//! let setup = SceneSetup::load("cornell").unwrap();
+//! let setup = SceneSetup::builtin("cornell").unwrap();
 //! let camera = setup.camera.with_resolution((64, 64)).unwrap();
 //! let gbuffer = GBuffer::empty();
 //! let frame = |index| Frame { scene: &setup.scene, camera: &camera, time: 0.0, index, seed: 1, gbuffer: &gbuffer, previous: None };

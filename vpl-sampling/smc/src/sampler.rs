@@ -864,7 +864,7 @@ mod tests {
     /// at most M_max a frame, and the same run gives the same points.
     #[test]
     fn random_placement_keeps_each_vpls_point_for_its_life() {
-        let setup = vpl_core::SceneSetup::load("cornell").unwrap();
+        let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((32, 32)).unwrap();
         let gbuffer = vpl_core::GBuffer::empty();
         let config = SmcConfig { vpls: 128, warmup: 8, placement: Placement::Random, ..SmcConfig::default() };

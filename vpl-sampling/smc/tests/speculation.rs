@@ -37,7 +37,7 @@ impl RayCaster for Counted {
 
 #[test]
 fn speculative_rounds_take_the_round_by_round_decisions() {
-    let setup = SceneSetup::load("office").unwrap();
+    let setup = SceneSetup::builtin("office").unwrap();
     let config = SmcConfig { vpls: 256, warmup: 8, ..SmcConfig::default() };
     let casters = [false, true].map(|speculates| std::sync::Arc::new(Counted { speculates, batches: Mutex::new(0) }));
     let mut samplers =

@@ -75,7 +75,7 @@ mod tests {
     /// paths, whose own spread is about 1 %).
     #[test]
     fn texel_flux_sums_to_the_first_bounce_light() {
-        let scene = SceneSetup::load("cornell").unwrap().scene;
+        let scene = SceneSetup::builtin("cornell").unwrap().scene;
         let total: Vec3 =
             (0..scene.lights.len()).map(|l| Rsm::render(&scene, l, 64).texels.iter().flatten().map(|t| t.power).sum::<Vec3>()).sum();
         let mut ir = Vec3::ZERO;

@@ -340,7 +340,7 @@ mod tests {
     /// doubles it); the AVX2 and portable rows give the same bits.
     #[test]
     fn fast_filter_matches_the_exact_one() {
-        let setup = vpl_core::SceneSetup::load("office").unwrap();
+        let setup = vpl_core::SceneSetup::builtin("office").unwrap();
         let camera = setup.camera.with_resolution((61, 37)).unwrap();
         let gbuf = crate::render_gbuffer(&setup.scene, &camera);
         let mut e = Image::new(61, 37);

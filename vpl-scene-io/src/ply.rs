@@ -3,13 +3,13 @@
 //! `nx ny nz`, and faces as `vertex_indices` (or `vertex_index`) lists,
 //! polygons split into fans. Other elements and properties are ignored.
 
-use crate::error::{CoreError, Result};
 use crate::input::{MAX_MESH_BYTES, read_bytes};
-use crate::mesh::{Mesh, TriangleDesc};
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 use std::path::Path;
+use vpl_core::error::{CoreError, Result};
+use vpl_core::mesh::{Mesh, TriangleDesc};
 
 /// Reads a PLY mesh; every triangle gets material 0.
 pub fn load_ply(path: &Path) -> Result<Mesh> {

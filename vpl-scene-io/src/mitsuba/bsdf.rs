@@ -1,5 +1,5 @@
 //! Mitsuba BSDFs onto the toolkit's materials: Lambertian albedo, or the
-//! κ-layered model ([`crate::bsdf`]).
+//! κ-layered model ([`vpl_core::bsdf`]).
 //!
 //! | Mitsuba | toolkit |
 //! | --- | --- |
@@ -18,10 +18,10 @@
 
 use super::xml::{Object, Value};
 use super::{Ctx, TexParam};
-use crate::error::Result;
-use crate::material::{Layered, Material};
-use crate::spectral::SpectrumKind;
 use glam::Vec3;
+use vpl_core::error::Result;
+use vpl_core::material::{Layered, Material};
+use vpl_core::spectral::SpectrumKind;
 
 /// A BSDF as the toolkit reads it.
 pub(crate) struct Bsdf {

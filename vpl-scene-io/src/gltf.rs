@@ -22,7 +22,7 @@
 //!   opaque material, metal or not, is Lambertian with the base colour (the
 //!   layered model draws a rough reflection as a Lambertian lobe, and so the
 //!   VPL methods, which read only the albedo, see what the path tracer
-//!   sees). Otherwise it gets the κ-layered model ([`crate::bsdf`]): albedo
+//!   sees). Otherwise it gets the κ-layered model ([`vpl_core::bsdf`]): albedo
 //!   (1 − m)·base for metallic m, specular tint (1 − m)·white + m·base,
 //!   `KHR_materials_transmission` as `transmission` and `KHR_materials_ior`
 //!   as `ior` (1.5 without).
@@ -42,19 +42,19 @@
 //! reader does not know is refused by name.
 
 use crate::bitmap::{AlphaUse, Depth, Texels};
-use crate::camera::FovAxis;
-use crate::error::{CoreError, Result};
 use crate::input::{MAX_IMAGE_BYTES, MAX_MESH_BYTES, read_bytes};
-use crate::material::{Layered, Material};
-use crate::mesh::{Mesh, TriangleDesc};
 use crate::sandbox::Sandbox;
-use crate::scene_file::{CameraSpec, LightSpec};
 use glam::{Mat3, Mat4, Vec3};
 pub use gltf;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use vpl_core::camera::FovAxis;
+use vpl_core::error::{CoreError, Result};
+use vpl_core::material::{Layered, Material};
+use vpl_core::mesh::{Mesh, TriangleDesc};
+use vpl_core::scene_file::{CameraSpec, LightSpec};
 
 /// A glTF scene as the toolkit reads it.
 #[derive(Clone, Debug, Default)]

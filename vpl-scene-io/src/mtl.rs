@@ -25,11 +25,11 @@
 //! file is no material library (an `mtllib` that names the OBJ itself) and is
 //! an error.
 
-use crate::error::{CoreError, Result};
-use crate::validate::MAX_RADIANCE;
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::Path;
+use vpl_core::error::{CoreError, Result};
+use vpl_core::validate::MAX_RADIANCE;
 
 /// One `newmtl` block, as written (absent statements are `None`).
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -1,13 +1,13 @@
 //! Mitsuba 3 XML loading on the samples in `tests/data/mitsuba` (copies of
 //! `../shared/scenes/mitsuba-xml`), and the errors outside the subset.
-#![cfg(feature = "formats")]
+#![cfg(all(feature = "mitsuba", feature = "toml"))]
 
 use std::path::{Path, PathBuf};
+use vpl_core::CoreError;
 use vpl_core::camera::FovAxis;
 use vpl_core::glam::Vec3;
-use vpl_core::mitsuba::{MitsubaData, load_mitsuba};
 use vpl_core::scene_file::LightSpec;
-use vpl_core::{CoreError, SceneSetup};
+use vpl_scene_io::mitsuba::{MitsubaData, load_mitsuba};
 
 fn data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba").join(p)
@@ -147,7 +147,7 @@ fn samples_load_as_scenes() {
     for p in
         ["cbox-mitsuba-data/cbox.xml", "cbox-tutorials/cbox.xml", "veach-mis-mitsuba-data/veach_mis.xml", "veach-mis-bitterli/scene.xml"]
     {
-        let s = SceneSetup::load(data(p).to_str().unwrap()).unwrap();
+        let s = vpl_scene_io::load(data(p).to_str().unwrap()).unwrap();
         assert!(!s.scene.lights.is_empty(), "{p}");
         assert!(s.warnings.is_empty(), "{p}: {:?}", s.warnings);
     }
@@ -278,13 +278,13 @@ fn a_scene_file_references_a_mitsuba_scene_with_parameters() {
     let xml = data("cbox-mitsuba-data/cbox-rgb.xml");
     std::fs::write(&toml, format!("[geometry]\nmitsuba = \"{}\"\n[geometry.mitsuba_params]\nres = \"32\"\n", xml.display())).unwrap();
     // The XML lies outside the scene file's folder: refused unless allowed.
-    let e = SceneSetup::load(toml.to_str().unwrap()).unwrap_err();
+    let e = vpl_scene_io::load(toml.to_str().unwrap()).unwrap_err();
     assert!(matches!(e, vpl_core::CoreError::OutsideScene { .. }), "{e}");
-    let allow = vpl_core::LoadOptions::allowing(xml.parent().unwrap());
-    let s = SceneSetup::load_with(toml.to_str().unwrap(), &allow).unwrap();
+    let allow = vpl_scene_io::LoadOptions::allowing(xml.parent().unwrap());
+    let s = vpl_scene_io::load_with(toml.to_str().unwrap(), &allow).unwrap();
     assert_eq!(s.camera.resolution, (32, 32));
     assert_eq!(s.scene.geometry.triangles.len(), 38);
     assert!(!s.scene.two_sided);
     // The description names the file and its parameters again.
-    assert!(s.to_toml().contains("mitsuba_params"), "{}", s.to_toml());
+    assert!(vpl_scene_io::scene_toml::setup_toml(&s).contains("mitsuba_params"), "{}", vpl_scene_io::scene_toml::setup_toml(&s));
 }

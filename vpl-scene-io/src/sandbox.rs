@@ -13,8 +13,8 @@
 //! process changes between the check and the read is outside what this
 //! guards.
 
-use crate::error::{CoreError, Result};
 use std::path::{Path, PathBuf};
+use vpl_core::error::{CoreError, Result};
 
 /// How a scene is loaded: which folders besides its own its files may read,
 /// and how much memory loading may take.

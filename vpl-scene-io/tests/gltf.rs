@@ -1,12 +1,12 @@
 //! glTF 2.0 loading on the samples in `tests/data/gltf` (copies of
 //! `../shared/scenes/gltf-samples`).
-#![cfg(feature = "formats")]
+#![cfg(feature = "gltf")]
 
 use std::path::{Path, PathBuf};
 use vpl_core::glam::Vec3;
-use vpl_core::gltf_file::{average_colour, kappa_from_roughness, load_gltf};
 use vpl_core::scene_file::LightSpec;
-use vpl_core::{CoreError, Light, SceneSetup};
+use vpl_core::{CoreError, Light};
+use vpl_scene_io::gltf::{average_colour, kappa_from_roughness, load_gltf};
 
 fn data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf").join(p)
@@ -81,9 +81,9 @@ fn the_texture_average_is_taken_in_linear_light() {
 
 #[test]
 fn alpha_masked_texels_are_left_out_and_blended_ones_count_by_alpha() {
-    let img = vpl_core::gltf_file::gltf::image::Data {
+    let img = vpl_scene_io::gltf::gltf::image::Data {
         pixels: vec![255, 255, 255, 255, 0, 0, 0, 0, 188, 188, 188, 128],
-        format: vpl_core::gltf_file::gltf::image::Format::R8G8B8A8,
+        format: vpl_scene_io::gltf::gltf::image::Format::R8G8B8A8,
         width: 3,
         height: 1,
     };
@@ -98,9 +98,9 @@ fn alpha_masked_texels_are_left_out_and_blended_ones_count_by_alpha() {
     assert!(close(masked, Vec3::ONE, 1e-6), "{masked}");
     let a = 128.0 / 255.0;
     assert!(close(blended, Vec3::splat((1.0 + a * g) / (1.0 + a)), 1e-5), "{blended}");
-    let clear = vpl_core::gltf_file::gltf::image::Data {
+    let clear = vpl_scene_io::gltf::gltf::image::Data {
         pixels: vec![9, 9, 9, 0],
-        format: vpl_core::gltf_file::gltf::image::Format::R8G8B8A8,
+        format: vpl_scene_io::gltf::gltf::image::Format::R8G8B8A8,
         width: 1,
         height: 1,
     };
@@ -134,7 +134,7 @@ fn sundial_has_its_sun_camera_and_hidden_nodes_left_out() {
     // The file has 10,134 triangles in all; the two nodes KHR_node_visibility hides are left out.
     assert!(n > 0 && n < 10_134, "{n}");
     // The whole file renders: lights, camera and geometry make a scene.
-    let s = SceneSetup::load(data("Sundial-KHR_lights_punctual/Sundial.glb").to_str().unwrap()).unwrap();
+    let s = vpl_scene_io::load(data("Sundial-KHR_lights_punctual/Sundial.glb").to_str().unwrap()).unwrap();
     assert!(matches!(s.scene.lights[0], Light::Directional { .. }));
     assert_eq!(s.camera.resolution.1, 480);
 }

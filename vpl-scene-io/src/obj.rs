@@ -10,19 +10,19 @@
 //!
 //! A material with a specular colour (`Ks` ≠ 0) or transparency (`d` < 1,
 //! `Tr` > 0, or `illum` 6 / 7) gets the κ-layered model of
-//! [`crate::bsdf`] (see [`layered_from_mtl`]); the VPL pipeline still reads
+//! [`vpl_core::bsdf`] (see [`layered_from_mtl`]); the VPL pipeline still reads
 //! `Kd` only, the path tracer and the progressive renderer the layers.
 
-use crate::error::{CoreError, Result};
 use crate::input::{self, MAX_MESH_BYTES, MAX_TEXT_BYTES};
-use crate::material::{Layered, Material};
-use crate::mesh::{Mesh, TriangleDesc};
 use crate::mtl::{MtlMaterial, parse_mtl};
 use crate::sandbox::Sandbox;
 use glam::Vec3;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use vpl_core::error::{CoreError, Result};
+use vpl_core::material::{Layered, Material};
+use vpl_core::mesh::{Mesh, TriangleDesc};
 
 /// What an OBJ file holds: the mesh, its materials and what the loader noticed.
 #[derive(Clone, Debug)]

@@ -6,9 +6,9 @@
 //! Every file the toolkit reads goes through [`read_bytes`] or [`read_text`]
 //! with one of the limits below.
 
-use crate::error::{CoreError, Result};
 use std::io::Read;
 use std::path::Path;
+use vpl_core::error::{CoreError, Result};
 
 /// The most bytes an OBJ file may have (4 GiB: about 40 M triangles).
 pub const MAX_MESH_BYTES: u64 = 4 << 30;
@@ -80,36 +80,7 @@ fn open_without_blocking(path: &Path) -> std::io::Result<std::fs::File> {
     options.open(path)
 }
 
-/// The folder of `path`: its parent, or `.` for a bare name.
-pub fn folder_of(path: &Path) -> std::path::PathBuf {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    }
-}
-
-/// What a path that is no regular file is, in words ("a directory", "a
-/// device", "a pipe", "a socket").
-pub fn kind_of(meta: &std::fs::Metadata) -> &'static str {
-    let t = meta.file_type();
-    if t.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_char_device() || t.is_block_device() {
-            return "a device";
-        }
-        if t.is_fifo() {
-            return "a pipe";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    "not a regular file"
-}
+pub use vpl_core::image::{folder_of, kind_of};
 
 #[cfg(test)]
 mod tests {

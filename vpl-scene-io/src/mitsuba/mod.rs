@@ -9,7 +9,7 @@
 //!   Properties: `float`, `integer`, `boolean`, `string`, `rgb` (one value
 //!   or three), `spectrum` (one value, or `wavelength:value` pairs turned to
 //!   linear sRGB as Mitsuba's RGB modes do, see
-//!   [`crate::spectral::spectrum_to_rgb`]), `point`, `vector`, and
+//!   [`vpl_core::spectral::spectrum_to_rgb`]), `point`, `vector`, and
 //!   `transform` with `translate`, `scale`, `rotate`, `matrix`, `lookat`.
 //! - **Shapes.** `obj`, `ply`, `rectangle`, `cube`, `disk` and `sphere`
 //!   (tessellated, 48 × 96; `center`, `radius`), with `to_world`,
@@ -48,16 +48,16 @@ mod xml;
 
 pub use bsdf::{CONDUCTORS, IOR_NAMES, conductor_f0, kappa_from_alpha};
 
-use crate::camera::FovAxis;
-use crate::error::Result;
-use crate::material::Material;
-use crate::mesh::Mesh;
 use crate::sandbox::Sandbox;
-use crate::scene_file::{CameraSpec, LightSpec};
-use crate::spectral::SpectrumKind;
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
+use vpl_core::camera::FovAxis;
+use vpl_core::error::Result;
+use vpl_core::material::Material;
+use vpl_core::mesh::Mesh;
+use vpl_core::scene_file::{CameraSpec, LightSpec};
+use vpl_core::spectral::SpectrumKind;
 use xml::{Child, Document, Loc, Object, Prop, Value};
 
 /// A Mitsuba scene as the toolkit reads it.
@@ -423,7 +423,7 @@ impl<'a> Ctx<'a> {
             }
             None => (768, 576),
         };
-        let max = crate::camera::MAX_RESOLUTION as i64;
+        let max = vpl_core::camera::MAX_RESOLUTION as i64;
         if !(1..=max).contains(&w) || !(1..=max).contains(&h) {
             return Err(self.doc.err(s.at, format!("{}: film {w} × {h} is outside 1 … {max}", s.what())));
         }

@@ -2,13 +2,14 @@
 //! `docs/robustness.md`): each class of glTF, Mitsuba and sandbox attack
 //! must end in one error line, promptly, with no panic, no unbounded
 //! allocation and no read outside the scene's folder.
-#![cfg(feature = "formats")]
+#![cfg(all(feature = "mitsuba", feature = "gltf", feature = "toml", feature = "exr"))]
 
 use std::path::Path;
-use vpl_core::gltf_file::{load_gltf, load_gltf_in};
-use vpl_core::mitsuba::load_mitsuba;
-use vpl_core::sandbox::Sandbox;
-use vpl_core::{CoreError, LoadOptions, SceneSetup};
+use vpl_core::CoreError;
+use vpl_scene_io::LoadOptions;
+use vpl_scene_io::gltf::{load_gltf, load_gltf_in};
+use vpl_scene_io::mitsuba::load_mitsuba;
+use vpl_scene_io::sandbox::Sandbox;
 
 /// Three FLOAT VEC3 positions of one triangle, then three u16 indices.
 fn triangle_bin() -> Vec<u8> {
@@ -274,7 +275,7 @@ fn mitsuba_meshes_named_many_times_are_weighed_together() {
     let limited = |n: usize| {
         std::fs::write(&p, scene(n)).unwrap();
         let options = LoadOptions { memory_limit: Some(20 * obj.len() as u64), ..Default::default() };
-        SceneSetup::load_with(p.to_str().unwrap(), &options)
+        vpl_scene_io::load_with(p.to_str().unwrap(), &options)
     };
     assert!(limited(20).is_ok());
     let e = limited(21).unwrap_err().to_string();
@@ -296,10 +297,10 @@ fn a_scene_file_names_only_files_in_its_folder() {
     let toml = inner.join("s.toml");
     std::fs::write(&toml, "[geometry]\ngltf = \"../m.gltf\"\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = [1, 1, 1]\n")
         .unwrap();
-    let e = SceneSetup::load(toml.to_str().unwrap()).unwrap_err();
+    let e = vpl_scene_io::load(toml.to_str().unwrap()).unwrap_err();
     assert!(matches!(e, CoreError::OutsideScene { .. }), "{e}");
-    assert!(SceneSetup::load_with(toml.to_str().unwrap(), &LoadOptions::allowing(dir.path())).is_ok());
+    assert!(vpl_scene_io::load_with(toml.to_str().unwrap(), &LoadOptions::allowing(dir.path())).is_ok());
     // The model named directly loads from wherever it is.
-    let setup = SceneSetup::load(model.to_str().unwrap());
+    let setup = vpl_scene_io::load(model.to_str().unwrap());
     assert!(setup.is_ok(), "{:?}", setup.err());
 }

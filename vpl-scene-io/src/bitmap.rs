@@ -64,7 +64,7 @@ pub fn mean_colour(t: Texels, srgb: bool, alpha: AlphaUse) -> Option<Vec3> {
     let channels = t.channels.clamp(1, 4);
     let size = channels * t.depth.bytes();
     // 8-bit sRGB through a table.
-    let lut: Vec<f32> = (0..256).map(|v| if srgb { crate::image::srgb_to_linear(v as f32 / 255.0) } else { v as f32 / 255.0 }).collect();
+    let lut: Vec<f32> = (0..256).map(|v| if srgb { vpl_core::image::srgb_to_linear(v as f32 / 255.0) } else { v as f32 / 255.0 }).collect();
     let raw = |x: &[u8], c: usize| -> f32 {
         match t.depth {
             Depth::U8 => x[c] as f32 / 255.0,
@@ -75,7 +75,7 @@ pub fn mean_colour(t: Texels, srgb: bool, alpha: AlphaUse) -> Option<Vec3> {
     let linear = |x: &[u8], c: usize| -> f32 {
         match t.depth {
             Depth::U8 => lut[x[c] as usize],
-            Depth::U16 if srgb => crate::image::srgb_to_linear(raw(x, c)),
+            Depth::U16 if srgb => vpl_core::image::srgb_to_linear(raw(x, c)),
             _ => raw(x, c),
         }
     };

@@ -3,14 +3,14 @@
 //! substitution applied, every value parsed where it stands so that an
 //! error names its file and line.
 
-use crate::error::{CoreError, Result};
 use crate::input::{MAX_TEXT_BYTES, read_text};
 use crate::sandbox::Sandbox;
-use crate::spectral::{SpectrumKind, spectrum_to_rgb};
 use glam::{Mat4, Vec3};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use vpl_core::error::{CoreError, Result};
+use vpl_core::spectral::{SpectrumKind, spectrum_to_rgb};
 
 /// How deep `<include>`s and objects may nest.
 const MAX_DEPTH: usize = 64;

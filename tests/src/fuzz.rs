@@ -856,7 +856,7 @@ fn execute(target: Target, seed: &Seed, input: &[u8], dir: &Path, variant: u64) 
         _ => &seed.files[0].0,
     });
     let out = dir.join("out.exr");
-    let code = vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), command(&scene, &out, variant));
+    let code = vpl_cli::run(&vpl_sampling::Registry::builtin(), command(&scene, &out, variant));
     match code {
         0 => match Image::read_exr(&out) {
             Ok(img) if img.data.iter().all(|p| p.is_finite()) => {
@@ -908,7 +908,7 @@ fn execute_sequence(dir: &Path, variant: u64, before: &[PathBuf]) -> Outcome {
     .chain([out.display().to_string()])
     .map(|a| if a == "s.toml" { dir.join("s.toml").display().to_string() } else { a })
     .collect();
-    match vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), args) {
+    match vpl_cli::run(&vpl_sampling::Registry::builtin(), args) {
         0 => {
             let exrs: Vec<PathBuf> = listing(&out).into_iter().filter(|p| p.extension().is_some_and(|e| e == "exr")).collect();
             if exrs.len() != 2 {
@@ -932,7 +932,7 @@ fn execute_sequence(dir: &Path, variant: u64, before: &[PathBuf]) -> Outcome {
 /// prints no infinity or NaN; on a refusal no output is left.
 fn execute_merge(dir: &Path, before: &[PathBuf]) -> Outcome {
     let args = vec!["vpl".to_string(), "merge".into(), dir.display().to_string()];
-    match vpl_bench::cli::run(&vpl_sampling::Registry::builtin(), args) {
+    match vpl_cli::run(&vpl_sampling::Registry::builtin(), args) {
         0 => match std::fs::read_to_string(dir.join("table1.md")) {
             Ok(md) if md.contains("inf") || md.contains("NaN") => Outcome::Finding("exit 0 with inf or NaN in table1.md".into()),
             Ok(_) => Outcome::Accepted,

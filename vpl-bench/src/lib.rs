@@ -1,8 +1,11 @@
 //! # vpl-bench
 //!
-//! Measuring the toolkit: image comparisons with standard errors, the
-//! validation of the path tracer against Mitsuba 3, throughput figures, and
-//! the `vpl` command-line tool.
+//! The toolkit's experiments as a library: Table 1 and Table 2 of the SMC
+//! paper, figures, Georgiev's experiments, plots, image comparisons with
+//! standard errors, the validation of the path tracer against Mitsuba 3,
+//! stage timings and throughput figures. Each reports progress through a
+//! callback and returns its results; the `vpl` command (`vpl-cli`) parses
+//! arguments, draws progress bars and writes the files.
 //!
 //! ```
 //! use vpl_bench::compare::{compare, z_critical};
@@ -32,7 +35,6 @@
 
 #![warn(missing_docs)]
 
-pub mod cli;
 pub mod cpu_time;
 pub mod energy;
 pub mod error;

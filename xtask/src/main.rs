@@ -175,7 +175,7 @@ fn main() -> ExitCode {
 /// Builds the `vpl` binary in release mode and returns its path.
 fn build_vpl() -> Result<PathBuf, String> {
     let mut c = cargo();
-    c.args(["build", "--release", "--quiet", "-p", "vpl-bench", "--bin", "vpl"]);
+    c.args(["build", "--release", "--quiet", "-p", "vpl-cli", "--bin", "vpl"]);
     run(c, "building vpl")?;
     Ok(target_dir()?.join("release").join(format!("vpl{}", std::env::consts::EXE_SUFFIX)))
 }

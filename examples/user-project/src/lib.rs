@@ -7,7 +7,7 @@
 //! `cargo run --features cli --bin vpl -- render --scene cornell --method vpl --sampler uniform-area`
 //! is the `vpl` command with this project's registry.
 
-#[path = "../../../vpl-bench/examples/user_sampler/uniform_area.rs"]
+#[path = "../../../vpl-cli/examples/user_sampler/uniform_area.rs"]
 mod uniform_area;
 
 use vpl_render::Registry;

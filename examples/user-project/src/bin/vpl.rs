@@ -1,5 +1,5 @@
 //! The toolkit's `vpl` command with this project's samplers in its registry.
 
 fn main() {
-    vpl_bench::cli::main(&my_vpl_experiment::registry())
+    vpl_cli::main(&my_vpl_experiment::registry())
 }

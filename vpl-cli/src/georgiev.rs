@@ -50,13 +50,13 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         return Err(format!("--out {} is not a directory", out.display()));
     }
     let settings =
-        crate::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed, rr };
+        vpl_bench::georgiev::GeorgievSettings { size: (size.0, size.1), vpls, warmup_frames: 4, frames, reference_spp: spp, seed, rr };
     let bar = ProgressBar::new_spinner();
     bar.set_style(ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}").unwrap());
     if let Some(bad) = sweep.iter().find(|e| !(**e > 0.0 && **e <= 1.0)) {
         return Err(format!("--sweep: epsilon {bad} is outside (0, 1]"));
     }
-    let r = crate::georgiev::georgiev(&settings, &sweep, &|m| {
+    let r = vpl_bench::georgiev::georgiev(&settings, &sweep, &|m| {
         let short: String = m.chars().take(100).collect();
         bar.set_message(short);
         bar.tick();

@@ -37,7 +37,7 @@ pub(super) struct Args {
     seeds: Option<u32>,
     /// Run only shard I of N (units k with k mod N = I); merge later with `vpl merge`.
     #[arg(long)]
-    shard: Option<crate::table1::Shard>,
+    shard: Option<vpl_bench::table1::Shard>,
     /// Where the VPL stages run (the ground truth is always path traced on the CPU).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     backend: BackendArg,
@@ -55,7 +55,7 @@ pub(super) struct Args {
 /// Runs `vpl table1`.
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let Args { profile, scenes, methods, frames, size, truth_spp, seed, seeds, shard, backend, threads, out, quiet } = args;
-    use crate::table1::{self, Table1Spec};
+    use vpl_bench::table1::{self, Table1Spec};
     let mut spec = match profile {
         ProfileArg::Quick => Table1Spec::quick(),
         ProfileArg::Full => Table1Spec::full().map_err(|e| e.to_string())?,

@@ -6,7 +6,7 @@
 //! ```no_run
 //! let mut registry = vpl_sampling::Registry::builtin();
 //! // registry.register(my_sampler_entry()).unwrap();
-//! vpl_bench::cli::main(&registry);
+//! vpl_cli::main(&registry);
 //! ```
 //!
 //! One module per subcommand (`render`, `sequence`, `table1`, …), each with
@@ -72,10 +72,10 @@ enum BackendArg {
 }
 
 impl BackendArg {
-    fn backend(self) -> crate::pipeline::BackendKind {
+    fn backend(self) -> vpl_bench::pipeline::BackendKind {
         match self {
-            BackendArg::Cpu => crate::pipeline::BackendKind::Cpu,
-            BackendArg::Gpu => crate::pipeline::BackendKind::Gpu,
+            BackendArg::Cpu => vpl_bench::pipeline::BackendKind::Cpu,
+            BackendArg::Gpu => vpl_bench::pipeline::BackendKind::Gpu,
         }
     }
 }
@@ -407,7 +407,7 @@ where
         eprintln!("vpl: error: --scenes-dir {}: not a folder", dir.display());
         return 2;
     }
-    crate::scenes::set_dir(cli.scenes_dir.clone());
+    vpl_bench::scenes::set_dir(cli.scenes_dir.clone());
     match dispatch(cli, registry) {
         Ok(()) => 0,
         Err(e) => {
@@ -603,8 +603,8 @@ fn pipeline_spec(
     mode: ModeArg,
     clamp: vpl_render::Clamp,
     seed: u64,
-) -> Res<crate::pipeline::PipelineSpec> {
-    use crate::pipeline::{PipelineSpec, ShadingSpec, VisibilitySpec};
+) -> Res<vpl_bench::pipeline::PipelineSpec> {
+    use vpl_bench::pipeline::{PipelineSpec, ShadingSpec, VisibilitySpec};
     if v.direct_samples == 0 {
         return Err("--direct-samples must be at least 1".into());
     }
@@ -642,7 +642,7 @@ fn pipeline_spec(
 /// states it ([`vpl_sampling::SamplerEntry::with_memory`]).
 fn with_sampler_memory(
     estimate: vpl_render::MemoryEstimate,
-    spec: &crate::pipeline::PipelineSpec,
+    spec: &vpl_bench::pipeline::PipelineSpec,
     registry: &Registry,
 ) -> vpl_render::MemoryEstimate {
     let Ok(entry) = registry.entry(&spec.sampler) else { return estimate };
@@ -764,9 +764,9 @@ fn sampling_line(sampler: &str, e: &vpl_sampling::SamplingError) -> String {
 }
 
 /// A renderer for `spec` on frames of `scene`, or one line that names what is wrong.
-fn build_renderer(spec: &crate::pipeline::PipelineSpec, registry: &Registry, scene: &vpl_core::Scene) -> Res<vpl_render::Renderer> {
-    spec.build(registry, &crate::pipeline::backends(), scene).map_err(|e| match e {
+fn build_renderer(spec: &vpl_bench::pipeline::PipelineSpec, registry: &Registry, scene: &vpl_core::Scene) -> Res<vpl_render::Renderer> {
+    spec.build(registry, &vpl_bench::pipeline::backends(), scene).map_err(|e| match e {
         vpl_render::RenderError::Sampling(e) => sampling_line(&spec.sampler, &e),
-        e => crate::pipeline::backend_line(e),
+        e => vpl_bench::pipeline::backend_line(e),
     })
 }

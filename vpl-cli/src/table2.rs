@@ -39,37 +39,37 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     if frames == 0 {
         return Err("--frames must be at least 1".into());
     }
-    let gpu = backend.backend() == crate::pipeline::BackendKind::Gpu;
-    let smc: crate::smc_step::SmcPlace = match smc {
+    let gpu = backend.backend() == vpl_bench::pipeline::BackendKind::Gpu;
+    let smc: vpl_bench::smc_step::SmcPlace = match smc {
         Some(s) => s.parse().map_err(|e| format!("--smc: {e}"))?,
-        None if gpu => crate::smc_step::SmcPlace::Device,
-        None => crate::smc_step::SmcPlace::Host,
+        None if gpu => vpl_bench::smc_step::SmcPlace::Device,
+        None => vpl_bench::smc_step::SmcPlace::Host,
     };
-    if smc == crate::smc_step::SmcPlace::Device && !gpu {
+    if smc == vpl_bench::smc_step::SmcPlace::Device && !gpu {
         return Err("--smc device needs --backend gpu".into());
     }
     let pool = pool(threads)?;
-    if let Some(bad) = scenes.iter().find(|s| !crate::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
+    if let Some(bad) = scenes.iter().find(|s| !vpl_bench::table2::PAPER.iter().any(|p| p.1 == s.as_str())) {
         return Err(format!("--scene: '{bad}' is not a Table 2 scene (courtyard, office, atrium, maze)"));
     }
     let dir = OutDir::create("--out", &out)?;
     let mut rows = Vec::new();
     let mut device = format!("this machine's CPU ({} threads)", pool.current_num_threads());
-    for (paper, scene, _, vpls, _) in crate::table2::PAPER {
+    for (paper, scene, _, vpls, _) in vpl_bench::table2::PAPER {
         if !scenes.is_empty() && !scenes.iter().any(|s| s == scene) {
             continue;
         }
         eprintln!("vpl: table2: {scene} ({vpls} VPLs, {w}x{h}, {frames} frames)");
-        let start = crate::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
+        let start = vpl_bench::table1::rows::row(scene).map_or(0, |r| r.quick_frames.start);
         let spec =
-            crate::table2::Table2Spec { scene, paper_scene: paper, size: (w, h), vpls, start, frames, backend: backend.backend(), smc };
-        let (row, adapter) = pool.install(|| crate::table2::time_scene(&spec)).map_err(|e| e.to_string())?;
+            vpl_bench::table2::Table2Spec { scene, paper_scene: paper, size: (w, h), vpls, start, frames, backend: backend.backend(), smc };
+        let (row, adapter) = pool.install(|| vpl_bench::table2::time_scene(&spec)).map_err(|e| e.to_string())?;
         if let Some(a) = adapter {
             device = match smc {
-                crate::smc_step::SmcPlace::Device => format!(
+                vpl_bench::smc_step::SmcPlace::Device => format!(
                     "{a}: SMC with the paper's kNN flux wholly on the device (its columns timed there by timestamps), the G-buffer, shadow maps and shading"
                 ),
-                crate::smc_step::SmcPlace::Host => format!(
+                vpl_bench::smc_step::SmcPlace::Host => format!(
                     "{a} for the G-buffer, shadow maps, shading and SMC's rays and radiosities; the rest of sampling on the CPU ({} threads)",
                     pool.current_num_threads()
                 ),
@@ -77,7 +77,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         }
         rows.push(row);
     }
-    crate::table2::write(dir.path(), &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
+    vpl_bench::table2::write(dir.path(), &rows, (w, h), frames, &device).map_err(|e| e.to_string())?;
     dir.keep()?;
     eprintln!("vpl: table2 -> {}", out.join("table2.md").display());
     Ok(())

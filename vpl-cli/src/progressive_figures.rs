@@ -77,7 +77,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         threads,
         out,
     } = args;
-    use crate::progressive as pf;
+    use vpl_bench::progressive as pf;
     if vpls == 0 {
         return Err("--vpls must be at least 1".into());
     }

@@ -18,8 +18,8 @@
 //!
 //! ```no_run
 //! use vpl_core::Image;
-//! use vpl_bench::cli::tev_ipc::TevClient;
-//! # fn main() -> Result<(), vpl_bench::cli::tev_ipc::TevError> {
+//! use vpl_cli::tev_ipc::TevClient;
+//! # fn main() -> Result<(), vpl_cli::tev_ipc::TevError> {
 //! let mut tev = TevClient::connect("127.0.0.1:14158")?;
 //! let img = Image::new(64, 48);
 //! tev.create_rgb("render", img.width, img.height)?;

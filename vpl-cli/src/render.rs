@@ -203,12 +203,12 @@ fn render_vpl(registry: &Registry, job: Job<'_>, mode: ModeArg, v: &VplArgs) -> 
     let estimate = with_sampler_memory(vpl_render::MemoryEstimate::vpl_frame(&sc, camera.resolution, vpls, maps), &spec, registry);
     check_memory(&estimate, memory_limit)?;
     let mut p = build_renderer(&spec, registry, &sc)?;
-    p.backend().check_size(camera.resolution).map_err(crate::pipeline::backend_line)?;
+    p.backend().check_size(camera.resolution).map_err(vpl_bench::pipeline::backend_line)?;
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }
     let sink = tev.map(|a| TevSink::open(a, format!("{} vpl {}", sc.name, p.sampler().name()), camera.resolution)).transpose()?;
-    let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0)).map_err(crate::pipeline::backend_line)?;
+    let r = pool.install(|| p.render(&sc, &camera, frame as u64, frame as f32 / 30.0)).map_err(vpl_bench::pipeline::backend_line)?;
     if let (Some(s), Some(a)) = (sink, tev) {
         s.image(&r.image);
         s.finish(a, quiet);

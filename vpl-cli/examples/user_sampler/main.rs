@@ -2,7 +2,7 @@
 //! rendered through the library (alone and as the candidate source of
 //! Russian-roulette acceptance) and through every subcommand of the `vpl`
 //! command (`render`, `sequence`, a small Table 1), by calling
-//! `vpl_bench::cli::run` with your registry.
+//! `vpl_cli::run` with your registry.
 //!
 //! Run: `cargo run -p vpl-bench --example user_sampler`
 
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     for args in runs {
         println!("$ {}", args.join(" "));
-        let code = vpl_bench::cli::run(&registry, &args);
+        let code = vpl_cli::run(&registry, &args);
         if code != 0 {
             let _ = std::fs::remove_dir_all(&dir);
             return Err(format!("{} exited with {code}", args[1]).into());

@@ -67,7 +67,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
         threads,
         out,
     } = args;
-    use crate::figures;
+    use vpl_bench::figures;
     if spp == 0 || fig10_spp == 0 || budgets.contains(&0) || shadow_maps.is_empty() {
         return Err("--spp and --budgets must be positive and --shadow-maps not empty".into());
     }

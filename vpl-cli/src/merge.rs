@@ -15,7 +15,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     if !dir.join("spec.json").exists() {
         return Err(format!("{} holds no Table 1 run (no spec.json)", dir.display()));
     }
-    crate::table1::merge(&dir).map_err(|e| e.to_string())?;
+    vpl_bench::table1::merge(&dir).map_err(|e| e.to_string())?;
     eprintln!("vpl: merged -> {}", dir.join("table1.md").display());
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! energy.md and energy.json.
 
 use super::*;
-use crate::energy::{EnergySettings, markdown, measure};
+use vpl_bench::energy::{EnergySettings, markdown, measure};
 
 /// A sampler's unclamped indirect image mean against the path tracer's, at frame 0 and over
 /// checkpoints of each scene's sequence (the sampler stepped along it), with the share of its light
@@ -94,7 +94,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let mut skipped = Vec::new();
     let mut setups = Vec::new();
     for s in &scenes {
-        match crate::table1::rows::row(s) {
+        match vpl_bench::table1::rows::row(s) {
             Some(row) => match row.missing() {
                 Some(why) => skipped.push(format!("{s}: {why}")),
                 None => setups.push((s.clone(), row.setup().map_err(|e| e.to_string())?)),

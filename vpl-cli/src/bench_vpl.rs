@@ -39,7 +39,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for name in ["cornell", "office"] {
-        let b = pool.install(|| crate::stages::bench_stages(name, (size.0, size.1), vpls, repeat)).map_err(|e| e.to_string())?;
+        let b = pool.install(|| vpl_bench::stages::bench_stages(name, (size.0, size.1), vpls, repeat)).map_err(|e| e.to_string())?;
         println!(
             "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | **{:.1}** |",
             b.gbuffer, b.direct, b.sampling, b.shadow_maps_all, b.shadow_maps_16, b.gather, b.filter, b.indirect_frame
@@ -53,8 +53,9 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     println!("| scene | VPLs | cand. sampling | cand. resampling | indirect visibility | radiosity | kNN | **total** | VPLs moved |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for (name, budget) in [("office", vpls), ("maze", (vpls / 4).max(1))] {
-        let b =
-            pool.install(|| crate::stages::bench_smc(name, (size.0, size.1), budget, 300, repeat.max(15))).map_err(|e| e.to_string())?;
+        let b = pool
+            .install(|| vpl_bench::stages::bench_smc(name, (size.0, size.1), budget, 300, repeat.max(15)))
+            .map_err(|e| e.to_string())?;
         println!(
             "| {name} | {budget} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | **{:.1}** | {:.0} |",
             b.candidates, b.resampling, b.visibility, b.radiosity, b.knn, b.total, b.moved
@@ -68,7 +69,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     println!("| sampler | first frame | **per frame** | VPLs moved per frame | VPLs stored |");
     println!("| --- | --- | --- | --- | --- |");
     let rows = pool
-        .install(|| crate::stages::bench_samplers(registry, "office", (size.0, size.1), vpls, 300, repeat.max(8)))
+        .install(|| vpl_bench::stages::bench_samplers(registry, "office", (size.0, size.1), vpls, 300, repeat.max(8)))
         .map_err(|e| e.to_string())?;
     for b in rows {
         println!("| {} | {:.1} | **{:.1}** | {:.0} | {:.0} |", b.name, b.first_ms, b.frame_ms, b.moved, b.stored);

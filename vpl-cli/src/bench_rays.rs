@@ -2,7 +2,7 @@
 //! closest hits and occlusion, on scenes of growing size.
 
 use super::*;
-use crate::rays::{RaySets, closest_rate, fan_rate, occluded_rate, side_by_side, timed_build};
+use vpl_bench::rays::{RaySets, closest_rate, fan_rate, occluded_rate, side_by_side, timed_build};
 
 /// BVH build time and memory, and M rays/s for primary and diffuse closest hits and shadow
 /// occlusion, on `cornell` (36 triangles), Dabrovic's Sponza (66K) and five Sponzas side by
@@ -29,8 +29,8 @@ pub(super) struct Args {
 /// The default scenes: `cornell` and, where its model is present, Sponza.
 fn default_scenes() -> Vec<String> {
     let mut s = vec!["cornell".to_string()];
-    match crate::scenes::locate("sponza-dabrovic.toml") {
-        Ok(sponza) => match crate::scenes::model_missing(&sponza) {
+    match vpl_bench::scenes::locate("sponza-dabrovic.toml") {
+        Ok(sponza) => match vpl_bench::scenes::model_missing(&sponza) {
             None => s.push(sponza.display().to_string()),
             Some(why) => eprintln!("bench-rays: Dabrovic's Sponza: {why}; cornell only"),
         },

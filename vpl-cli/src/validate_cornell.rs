@@ -30,8 +30,8 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     bar.set_style(
         ProgressStyle::with_template("{msg:>9} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}").unwrap().progress_chars("=> "),
     );
-    let vs = crate::validation::validate_cornell(&data, spp, seed, &|m, d, t| {
-        let k = crate::validation::MODES.iter().position(|x| x.0 == m).unwrap_or(0) as u64;
+    let vs = vpl_bench::validation::validate_cornell(&data, spp, seed, &|m, d, t| {
+        let k = vpl_bench::validation::MODES.iter().position(|x| x.0 == m).unwrap_or(0) as u64;
         bar.set_message(m.to_string());
         bar.set_position(k * t + d);
     })
@@ -41,11 +41,11 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
     // Where the files go until the command succeeds (see OutDir).
     let to = dir.path().to_path_buf();
     for v in &vs {
-        crate::validation::write_difference(v, &to).map_err(|e| e.to_string())?;
+        vpl_bench::validation::write_difference(v, &to).map_err(|e| e.to_string())?;
         v.ours.0.write_png(to.join(format!("cornell_{}_ours.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
         v.theirs.0.write_png(to.join(format!("cornell_{}_mitsuba.png", v.mode)), 1.0).map_err(|e| e.to_string())?;
     }
-    let md = crate::validation::report_markdown(&vs, spp);
+    let md = vpl_bench::validation::report_markdown(&vs, spp);
     write_atomic(&to.join("cornell_validation.md"), md.as_bytes()).map_err(|e| e.to_string())?;
     dir.keep()?;
     print!("{md}");

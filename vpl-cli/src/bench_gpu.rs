@@ -49,7 +49,7 @@ fn bench_gpu(args: Args) -> Res<()> {
     if frames == 0 || vpls == 0 {
         return Err("--frames and --vpls must be at least 1".into());
     }
-    let places: Vec<crate::gpu_bench::SmcPlace> =
+    let places: Vec<vpl_bench::gpu_bench::SmcPlace> =
         smc.iter().map(|s| s.parse().map_err(|e| format!("--smc: {e}"))).collect::<Result<_, _>>()?;
     for s in &scenes {
         vpl_scene_io::load(s).map_err(|e| format!("--scene: {e}"))?;
@@ -61,14 +61,14 @@ fn bench_gpu(args: Args) -> Res<()> {
     let mut rows = Vec::new();
     for s in &scenes {
         eprintln!("vpl: bench-gpu: {s} ({vpls} VPLs, {}x{}, {frames} frames)", size.0, size.1);
-        let start = crate::table1::rows::row(s).map_or(0, |r| r.quick_frames.start);
+        let start = vpl_bench::table1::rows::row(s).map_or(0, |r| r.quick_frames.start);
         for &place in &places {
-            let spec = crate::gpu_bench::GpuBenchSpec { scene: s, size, vpls, start, frames, resident, smc: place };
-            let row = pool.install(|| crate::gpu_bench::bench_scene(&gpu, &spec));
+            let spec = vpl_bench::gpu_bench::GpuBenchSpec { scene: s, size, vpls, start, frames, resident, smc: place };
+            let row = pool.install(|| vpl_bench::gpu_bench::bench_scene(&gpu, &spec));
             rows.push(row.map_err(|e| e.to_string())?);
         }
     }
-    let md = crate::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
+    let md = vpl_bench::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
     println!("{md}");
     if let Some(dir) = out {
         let out = super::OutDir::create("--out", dir)?;

@@ -71,7 +71,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     }
     let count = setup.sequence.as_ref().map_or(1, |q| q.frame_count());
     let range = frames.unwrap_or(FramesArg { start: 0, end: None }).range(count);
-    crate::sequence::check_frames(&setup, &range).map_err(|e| format!("--{e}"))?;
+    vpl_bench::sequence::check_frames(&setup, &range).map_err(|e| format!("--{e}"))?;
     let res = match size {
         Some(Size(w, h)) => (w, h),
         None => setup.camera.resolution,
@@ -96,9 +96,12 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if let (Some(a), false) = (p.backend().device(), quiet) {
         eprintln!("vpl: GPU: {a}");
     }
-    p.backend().check_size(res).map_err(crate::pipeline::backend_line)?;
-    let tracked: Vec<(u32, u32)> =
-        if pixels.is_empty() { crate::sequence::default_tracked_pixels(res.0, res.1) } else { pixels.iter().map(|p| (p.0, p.1)).collect() };
+    p.backend().check_size(res).map_err(vpl_bench::pipeline::backend_line)?;
+    let tracked: Vec<(u32, u32)> = if pixels.is_empty() {
+        vpl_bench::sequence::default_tracked_pixels(res.0, res.1)
+    } else {
+        pixels.iter().map(|p| (p.0, p.1)).collect()
+    };
     let dir = OutDir::create("--out", &out)?;
     let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(range.len() as u64) };
     bar.set_style(
@@ -107,7 +110,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     let start = Instant::now();
     let done = pool
         .install(|| {
-            crate::sequence::run_sequence(
+            vpl_bench::sequence::run_sequence(
                 &setup,
                 range.clone(),
                 size.map(|s| (s.0, s.1)),
@@ -124,7 +127,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
                 },
             )
         })
-        .map_err(crate::pipeline::backend_line)?;
+        .map_err(vpl_bench::pipeline::backend_line)?;
     bar.finish_and_clear();
     dir.keep()?;
     if !quiet {

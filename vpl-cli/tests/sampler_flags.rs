@@ -29,7 +29,7 @@ fn render(registry: &Registry, extra: &[&str], out: &std::path::Path) -> i32 {
         ["vpl", "render", "--scene", "cornell", "--method", "vpl", "--vpls", "16", "--size", "8x8", "--quiet"].map(String::from).to_vec();
     args.extend(extra.iter().map(|s| s.to_string()));
     args.extend(["--out".to_string(), out.to_string_lossy().into_owned()]);
-    vpl_bench::cli::run(registry, &args)
+    vpl_cli::run(registry, &args)
 }
 
 #[test]

@@ -525,7 +525,7 @@ fn views_of_nothing_and_dropped_layers_are_warned_in_one_line() {
 
 /// `--tev`: for each method, a server in the test receives the packets of
 /// tev's IPC protocol, decoded independently of the client
-/// (`vpl_bench::cli::tev_ipc::decode_stream`); replayed, they give the image the
+/// (`vpl_cli::tev_ipc::decode_stream`); replayed, they give the image the
 /// render wrote to its EXR, exactly. The path tracer sends tiles (several
 /// packets), the progressive renderer passes. A tev that cannot be
 /// reached is one line and exit 2, before rendering.
@@ -533,7 +533,7 @@ fn views_of_nothing_and_dropped_layers_are_warned_in_one_line() {
 fn render_streams_to_tev() {
     use std::io::Read;
     use std::net::TcpListener;
-    use vpl_bench::cli::tev_ipc::{Decoded, decode_stream, replay};
+    use vpl_cli::tev_ipc::{Decoded, decode_stream, replay};
     let d = scratch("tev");
     let methods: [&[&str]; 3] = [
         &["--method", "path", "--spp", "2"],

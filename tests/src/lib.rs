@@ -117,7 +117,12 @@ pub fn sampler_against_path_tracer(
     let (w, h) = camera.resolution;
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
     let pt = vpl_pathtrace::PathTracer::new(depth, mode);
-    let tracked = vpl_pathtrace::track_with(scene, camera, &pt, &pixels, paths, 3, 0, vpl_pathtrace::Footprint::Centre);
+    let tracked = vpl_pathtrace::track_with(
+        scene,
+        camera,
+        &pt,
+        &vpl_pathtrace::TrackRequest { pixels: &pixels, spp: paths, seed: 3, frame: 0, footprint: vpl_pathtrace::Footprint::Centre },
+    );
     let n = tracked.len() as f64;
     let m_pt = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / n;
     let se_pt = tracked.iter().map(|t| (luminance(t.stderr) as f64).powi(2)).sum::<f64>().sqrt() / n;

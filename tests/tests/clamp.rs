@@ -4,7 +4,7 @@
 
 use vpl_core::image::luminance;
 use vpl_core::{Camera, GeometryClamp, Image, Scene};
-use vpl_pathtrace::{Footprint, Mode, PathTracer, RenderSettings, render, track_with};
+use vpl_pathtrace::{Footprint, Mode, PathTracer, RenderSettings, TrackRequest, render, track_with};
 use vpl_render::compensation::{Compensation, compensate};
 use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
 use vpl_tests::mean_se;
@@ -44,7 +44,7 @@ fn path_traced(scene: &Scene, camera: &Camera, spp: u32) -> (Image, Image) {
     let (w, h) = camera.resolution;
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
     let pt = PathTracer::new(5, Mode::Indirect);
-    let tracked = track_with(scene, camera, &pt, &pixels, spp, 77, 0, Footprint::Centre);
+    let tracked = track_with(scene, camera, &pt, &TrackRequest { pixels: &pixels, spp, seed: 77, frame: 0, footprint: Footprint::Centre });
     let (mut mean, mut se) = (Image::new(w, h), Image::new(w, h));
     for t in tracked {
         mean.set(t.pixel.0, t.pixel.1, t.mean);

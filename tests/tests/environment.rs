@@ -23,7 +23,7 @@
 use vpl_core::environment::Sky;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, FovAxis, Light, Material, Mesh, Mode, Scene};
-use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, render, track_with};
+use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, TrackRequest, render, track_with};
 use vpl_shading::render_gbuffer;
 use vpl_tests::sampler_against_path_tracer;
 
@@ -66,7 +66,12 @@ fn convex_sphere_under_a_constant_sky_reflects_rho_l() {
     let gbuf = render_gbuffer(&scene, &camera);
     let (w, h) = camera.resolution;
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
-    let tracked = track_with(&scene, &camera, &PathTracer::new(5, Mode::Full), &pixels, 256, 3, 0, Footprint::Centre);
+    let tracked = track_with(
+        &scene,
+        &camera,
+        &PathTracer::new(5, Mode::Full),
+        &TrackRequest { pixels: &pixels, spp: 256, seed: 3, frame: 0, footprint: Footprint::Centre },
+    );
     let (mut sum, mut var, mut n_on) = (Vec3::ZERO, Vec3::ZERO, 0);
     for t in &tracked {
         let g = &gbuf.samples[(t.pixel.1 * w + t.pixel.0) as usize];

@@ -16,7 +16,11 @@
 //!   cell's flux (`SmcSampler::cell_pieces`): no point stands for a cell;
 //! - `own`: the same probes with the cells' areas, each with its own
 //!   radiance now (64 paths): what the areas alone give;
-//! - `cell means`: each cell's mean of those radiances, spread over it.
+//! - `cell means`: each cell's mean of those radiances, spread over it;
+//! - `own pooled`: `own` with each probe's area from its nearest probe
+//!   among those of every iteration held (on its side of the surface, or
+//!   on its own smooth surface), scaled to the same total: areas measured
+//!   at a radius about √T times shorter.
 //!
 //! and the median time of SMC's step over the last 32 frames.
 //!
@@ -31,7 +35,7 @@ use vpl_core::{
     Budget, Frame, Image, IndirectShader as _, MaterialPolicy, Mode, Params, RadiosityEstimator as _, Ray, Vpl, VplSampler, VplSet,
     VplVisibility as _,
 };
-use vpl_pathtrace::{Footprint, PathRadiosity, PathTracer, track_with};
+use vpl_pathtrace::{Footprint, PathRadiosity, PathTracer, TrackRequest, track_with};
 use vpl_sampling::{SmcConfig, SmcSampler};
 use vpl_shading::{ExhaustiveShader, render_gbuffer};
 use vpl_visibility::RayTraced;
@@ -112,16 +116,49 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let means = areas.iter().enumerate().map(|(k, &(i, p, n, a))| vpl(k, p, n, light[i] / area[i] * a)).collect();
     let (own, means) = (shade(&set_of(own)), shade(&set_of(means)));
+    // The same probes and radiances with areas from each probe's nearest
+    // neighbour among the probes of every iteration held (a radius √T
+    // times shorter than one iteration's), on its side of the surface
+    // (normals within 120°) or on its own smooth surface (within 60°),
+    // scaled to the cells' total area: where the areas' error comes from
+    // the radius (edges, corners, density changes), it shrinks here.
+    let points: Vec<Vec3> = areas.iter().map(|a| a.1).collect();
+    let normals: Vec<Vec3> = areas.iter().map(|a| a.2).collect();
+    let tree = vpl_density::KnnDensity::new(&points)?;
+    let total_area: f64 = areas.iter().map(|a| a.3 as f64).sum();
+    let pooled = |cos: f32| {
+        let r2: Vec<f32> = (0..points.len())
+            .into_par_iter()
+            .map(|i| tree.nearest_accepted(points[i], Some(i), |j| normals[j].dot(normals[i]) > cos).map_or(0.0, |(_, d2)| d2))
+            .collect();
+        let scale = total_area / r2.iter().map(|&r| r as f64).sum::<f64>();
+        let set: Vec<Vpl> = areas
+            .iter()
+            .zip(&own_l)
+            .zip(&r2)
+            .enumerate()
+            .map(|(k, ((&(_, p, n, _), &l), &r))| vpl(k, p, n, l * (r as f64 * scale) as f32))
+            .collect();
+        shade(&set_of(set))
+    };
+    let (pooled_side, pooled_surface) = (pooled(-0.5), pooled(0.5));
     let diffuse = scene.with_material_policy(MaterialPolicy::Diffuse);
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
-    let tracked = track_with(&diffuse, &camera, &PathTracer::new(5, Mode::Indirect), &pixels, 1024, 0, target as u64, Footprint::Centre);
+    let tracked = track_with(
+        &diffuse,
+        &camera,
+        &PathTracer::new(5, Mode::Indirect),
+        &TrackRequest { pixels: &pixels, spp: 1024, seed: 0, frame: target as u64, footprint: Footprint::Centre },
+    );
     let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
     println!(
-        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances', the candidates' {:.3}); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
+        "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3}, own pooled (side) {:.3}, own pooled (surface) {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances', the candidates' {:.3}); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
         sites / truth,
         pieces / truth,
         own / truth,
         means / truth,
+        pooled_side / truth,
+        pooled_surface / truth,
         areas.len(),
         pieces_light / own_light,
         smc.stats().candidate_light / own_light

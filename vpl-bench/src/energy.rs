@@ -27,7 +27,7 @@
 use std::time::Instant;
 use vpl_core::image::luminance;
 use vpl_core::{Budget, Frame, GeometryClamp, Image, IndirectShader as _, MaterialPolicy, Mode, Params, SceneSetup, VplVisibility as _};
-use vpl_pathtrace::{Footprint, PathTracer, track_with};
+use vpl_pathtrace::{Footprint, PathTracer, TrackRequest, track_with};
 use vpl_render::{Clamp, Renderer, ShadingSpec, VisibilitySpec};
 use vpl_sampling::Registry;
 use vpl_shading::{ExhaustiveShader, render_gbuffer};
@@ -257,7 +257,12 @@ pub fn measure(
         let (w, h) = camera.resolution;
         let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
         let pt = PathTracer::new(s.max_depth, Mode::Indirect);
-        let tracked = track_with(&scene, &camera, &pt, &pixels, s.truth_spp, s.seed, f as u64, Footprint::Centre);
+        let tracked = track_with(
+            &scene,
+            &camera,
+            &pt,
+            &TrackRequest { pixels: &pixels, spp: s.truth_spp, seed: s.seed, frame: f as u64, footprint: Footprint::Centre },
+        );
         let n = tracked.len().max(1) as f64;
         let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / n;
         let truth_se = tracked.iter().map(|t| (luminance(t.stderr) as f64).powi(2)).sum::<f64>().sqrt() / n;

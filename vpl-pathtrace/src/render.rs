@@ -259,22 +259,29 @@ pub enum Footprint {
 /// standard errors. Work is split into batches of [`TRACK_BATCH`] samples,
 /// each with its own stream, and reduced in a fixed order.
 pub fn track(scene: &Scene, camera: &Camera, pt: &PathTracer, pixels: &[(u32, u32)], spp: u32, seed: u64, frame: u64) -> Vec<TrackedPixel> {
-    track_with(scene, camera, pt, pixels, spp, seed, frame, Footprint::Box)
+    track_with(scene, camera, pt, &TrackRequest { pixels, spp, seed, frame, footprint: Footprint::Box })
+}
+
+/// What [`track_with`] samples: which pixels, how many samples at each,
+/// the seed and frame that key their streams, and where in each pixel the
+/// camera rays start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TrackRequest<'a> {
+    /// The pixels, (x, y).
+    pub pixels: &'a [(u32, u32)],
+    /// Samples at each pixel.
+    pub spp: u32,
+    /// The seed of the streams.
+    pub seed: u64,
+    /// The frame of the streams.
+    pub frame: u64,
+    /// Where in the pixel the rays start.
+    pub footprint: Footprint,
 }
 
 /// [`track`] with a choice of where in the pixel the camera rays start.
-#[allow(clippy::too_many_arguments)]
-pub fn track_with(
-    scene: &Scene,
-    camera: &Camera,
-    pt: &PathTracer,
-    pixels: &[(u32, u32)],
-    spp: u32,
-    seed: u64,
-    frame: u64,
-    footprint: Footprint,
-) -> Vec<TrackedPixel> {
-    tracked(scene, camera, pt, pixels, spp, seed, frame, footprint, &|_, _| {}, &AtomicBool::new(false))
+pub fn track_with(scene: &Scene, camera: &Camera, pt: &PathTracer, request: &TrackRequest) -> Vec<TrackedPixel> {
+    tracked(scene, camera, pt, request, &|_, _| {}, &AtomicBool::new(false))
 }
 
 /// [`track_with`] that reports `progress(batches done, batches)` as batches
@@ -282,20 +289,15 @@ pub fn track_with(
 /// (from another thread), checked before every batch, and then returns
 /// [`RenderError::Cancelled`]. An uncancelled run is [`track_with`]'s
 /// result bit for bit.
-#[allow(clippy::too_many_arguments)]
 pub fn track_cancellable(
     scene: &Scene,
     camera: &Camera,
     pt: &PathTracer,
-    pixels: &[(u32, u32)],
-    spp: u32,
-    seed: u64,
-    frame: u64,
-    footprint: Footprint,
+    request: &TrackRequest,
     progress: &(dyn Fn(u64, u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<Vec<TrackedPixel>, RenderError> {
-    let out = tracked(scene, camera, pt, pixels, spp, seed, frame, footprint, progress, cancel);
+    let out = tracked(scene, camera, pt, request, progress, cancel);
     if cancel.load(Ordering::Relaxed) {
         return Err(RenderError::Cancelled);
     }
@@ -304,19 +306,15 @@ pub fn track_cancellable(
 
 /// The batches of [`track_cancellable`]; those begun after `cancel` is set
 /// take no samples.
-#[allow(clippy::too_many_arguments)]
 fn tracked(
     scene: &Scene,
     camera: &Camera,
     pt: &PathTracer,
-    pixels: &[(u32, u32)],
-    spp: u32,
-    seed: u64,
-    frame: u64,
-    footprint: Footprint,
+    request: &TrackRequest,
     progress: &(dyn Fn(u64, u64) + Sync),
     cancel: &AtomicBool,
 ) -> Vec<TrackedPixel> {
+    let &TrackRequest { pixels, spp, seed, frame, footprint } = request;
     let batches = spp.div_ceil(TRACK_BATCH);
     let total = pixels.len() as u64 * batches as u64;
     let done = AtomicU64::new(0);
@@ -406,18 +404,19 @@ mod tests {
         let camera = setup.camera.with_resolution((48, 32)).unwrap();
         let pt = PathTracer::new(5, Mode::Full);
         let pixels = [(3, 4), (20, 16), (47, 31)];
-        let plain = track_with(&setup.scene, &camera, &pt, &pixels, 5000, 7, 0, Footprint::Box);
+        let plain = track_with(
+            &setup.scene,
+            &camera,
+            &pt,
+            &TrackRequest { pixels: &pixels, spp: 5000, seed: 7, frame: 0, footprint: Footprint::Box },
+        );
         let flag = AtomicBool::new(false);
         let seen = AtomicU64::new(0);
         let same = track_cancellable(
             &setup.scene,
             &camera,
             &pt,
-            &pixels,
-            5000,
-            7,
-            0,
-            Footprint::Box,
+            &TrackRequest { pixels: &pixels, spp: 5000, seed: 7, frame: 0, footprint: Footprint::Box },
             &|d, _| _ = seen.fetch_max(d, Ordering::Relaxed),
             &flag,
         )
@@ -426,7 +425,8 @@ mod tests {
         // Two batches per pixel (5000 = 4096 + 904).
         assert_eq!(seen.load(Ordering::Relaxed), 6);
         flag.store(true, Ordering::Relaxed);
-        let r = track_cancellable(&setup.scene, &camera, &pt, &pixels, 5000, 7, 0, Footprint::Box, &|_, _| {}, &flag);
+        let request = TrackRequest { pixels: &pixels, spp: 5000, seed: 7, frame: 0, footprint: Footprint::Box };
+        let r = track_cancellable(&setup.scene, &camera, &pt, &request, &|_, _| {}, &flag);
         assert!(matches!(r, Err(RenderError::Cancelled)));
     }
 

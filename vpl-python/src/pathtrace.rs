@@ -8,7 +8,7 @@ use crate::scene::PyScene;
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
-use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, render_cancellable, track_cancellable};
+use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, TrackRequest, render_cancellable, track_cancellable};
 use vpl_render::vpl_core::{MaterialPolicy, Mode};
 
 /// An image and its per-pixel standard errors, (height, width, 3) each.
@@ -130,11 +130,7 @@ pub fn track<'py>(
                 &sc,
                 &camera,
                 &pt,
-                &pixels,
-                spp,
-                seed,
-                frame,
-                footprint,
+                &TrackRequest { pixels: &pixels, spp, seed, frame, footprint },
                 &|d, _| _ = done.fetch_max(d, Ordering::Relaxed),
                 cancel,
             )

@@ -27,7 +27,7 @@ use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::write_atomic;
 use vpl_core::{Budget, CoreError, Mode, Params};
-use vpl_pathtrace::{Footprint, PathTracer, track_with};
+use vpl_pathtrace::{Footprint, PathTracer, TrackRequest, track_with};
 use vpl_sampling::Registry;
 
 /// Errors of a Table 1 run.
@@ -675,11 +675,13 @@ fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Tabl
         &scene,
         &camera,
         &pt,
-        &row.pixels(spec.size),
-        spec.truth_spp,
-        spec.seed ^ 0x0074_7275_7468,
-        frame as u64,
-        Footprint::Centre,
+        &TrackRequest {
+            pixels: &row.pixels(spec.size),
+            spp: spec.truth_spp,
+            seed: spec.seed ^ 0x0074_7275_7468,
+            frame: frame as u64,
+            footprint: Footprint::Centre,
+        },
     );
     Ok(TruthUnit {
         settings: Some(UnitSettings::of(spec)),

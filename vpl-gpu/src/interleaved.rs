@@ -207,7 +207,7 @@ impl GpuInterleavedShader {
         Some(self.run(gbuf, vpls, mode, &scene, eps, res, bias, sm))
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)] // the visibility's device parts, unpacked at the one call
     fn run(
         &mut self,
         gbuf: &GBuffer,

@@ -82,7 +82,7 @@ impl PathTracer {
     /// `wo` (pointing away from `sp`) after `k` scattering vertices; returns
     /// the radiance the rest of the path brings, counting paths whose total
     /// number of scattering vertices lies in `min_k..=max_k`.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)] // the path's state (point, direction, vertices) and its limits: the loop's variables
     #[allow(clippy::collapsible_if)] // each condition of next-event estimation on its own line, as the estimator reads
     fn walk(
         &self,
@@ -193,7 +193,7 @@ impl PathTracer {
     /// estimation, the others get light samples with MIS against their own
     /// lobe. A path that meets a dispersive surface draws a wavelength there
     /// and keeps it (lazy spectral rendering, Dammertz et al. 2010, §6).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)] // walk's state and limits, and the throughput it hands over
     fn walk_layered(
         &self,
         scene: &Scene,

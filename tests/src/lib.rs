@@ -96,23 +96,30 @@ impl MeanComparison {
 /// (pixels independent; this bounds the luminance's error, so it is
 /// conservative); the VPL renderer's is the spread over seeds.
 pub fn vpl_against_path_tracer(scene: &Scene, camera: &vpl_core::Camera, vpls: usize, seeds: u64, paths: u32) -> MeanComparison {
-    sampler_against_path_tracer(scene, camera, "ir", vpl_core::Mode::Full, 5, vpls, seeds, paths)
+    sampler_against_path_tracer(scene, camera, &Comparison { sampler: "ir", mode: vpl_core::Mode::Full, depth: 5, vpls, seeds, paths })
 }
 
-/// [`vpl_against_path_tracer`] with the built-in sampler `sampler`, the
-/// light paths of `mode` and both renderers at `depth` (Mitsuba's
-/// convention: 3 = direct light and one indirect bounce).
-#[allow(clippy::too_many_arguments)] // each is one setting of the comparison, named at the call
-pub fn sampler_against_path_tracer(
-    scene: &Scene,
-    camera: &vpl_core::Camera,
-    sampler: &str,
-    mode: vpl_core::Mode,
-    depth: u32,
-    vpls: usize,
-    seeds: u64,
-    paths: u32,
-) -> MeanComparison {
+/// The settings of [`sampler_against_path_tracer`].
+#[derive(Clone, Copy, Debug)]
+pub struct Comparison<'a> {
+    /// The built-in sampler.
+    pub sampler: &'a str,
+    /// The light paths both renderers include.
+    pub mode: vpl_core::Mode,
+    /// Both renderers' depth (Mitsuba's convention: 3 = direct light and
+    /// one indirect bounce).
+    pub depth: u32,
+    /// VPL budget.
+    pub vpls: usize,
+    /// Seeds of the VPL renderer.
+    pub seeds: u64,
+    /// Path tracer's paths a pixel.
+    pub paths: u32,
+}
+
+/// [`vpl_against_path_tracer`] with the settings of `c`.
+pub fn sampler_against_path_tracer(scene: &Scene, camera: &vpl_core::Camera, c: &Comparison) -> MeanComparison {
+    let &Comparison { sampler, mode, depth, vpls, seeds, paths } = c;
     use vpl_core::image::luminance;
     let (w, h) = camera.resolution;
     let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();

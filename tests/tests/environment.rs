@@ -25,7 +25,7 @@ use vpl_core::glam::Vec3;
 use vpl_core::{Camera, FovAxis, Light, Material, Mesh, Mode, Scene};
 use vpl_pathtrace::{Footprint, PathTracer, RenderSettings, TrackRequest, render, track_with};
 use vpl_shading::render_gbuffer;
-use vpl_tests::sampler_against_path_tracer;
+use vpl_tests::{Comparison, sampler_against_path_tracer};
 
 const RHO: f32 = 0.5;
 const L: Vec3 = Vec3::new(0.8, 1.0, 1.2);
@@ -146,7 +146,11 @@ fn vpl_methods_bring_sky_light_into_an_open_box() {
     let camera = Camera::new(Vec3::new(0.0, 1.3, 2.4), Vec3::new(0.0, 0.6, -0.3), Vec3::Y, 60.0, FovAxis::Smaller, (16, 12)).unwrap();
     for (sampler, depth, bound) in [("ir", 5, None), ("rr", 5, None), ("mir", 5, Some(0.1)), ("tcas", 3, Some(0.1)), ("smc", 5, Some(0.1))]
     {
-        let c = sampler_against_path_tracer(&scene, &camera, sampler, Mode::Indirect, depth, 2048, 8, 512);
+        let c = sampler_against_path_tracer(
+            &scene,
+            &camera,
+            &Comparison { sampler, mode: Mode::Indirect, depth, vpls: 2048, seeds: 8, paths: 512 },
+        );
         let ((m_pt, se_pt), (m, se)) = (c.path, c.vpl);
         let z = c.z(0.0);
         eprintln!("{sampler}: path tracer {m_pt:.5} ± {se_pt:.5}, VPL {m:.5} ± {se:.5}, ratio {:.4}, z = {z:.2}", m / m_pt);

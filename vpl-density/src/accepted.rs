@@ -184,12 +184,12 @@ impl AcceptTree {
             return Vec::new();
         }
         let mut best: Vec<Ranked> = Vec::with_capacity(m);
-        if !self.search(q, skip, &accept, m, k, &mut best, None) {
+        if !self.search(q, skip, &accept, (m, k), &mut best, None) {
             // The walk reached k points: again, keeping the k smallest
             // distances, and only the accepted points among them.
             best.clear();
             let mut kth = BinaryHeap::with_capacity(k.min(self.points.len()));
-            self.search(q, skip, &accept, m, k, &mut best, Some(&mut kth));
+            self.search(q, skip, &accept, (m, k), &mut best, Some(&mut kth));
             if let (true, Some(&t)) = (kth.len() == k, kth.peek()) {
                 best.retain(|r| r.0.to_bits() <= t);
             }
@@ -311,14 +311,14 @@ impl AcceptTree {
     /// later. A node beyond the m-th best accepted point is skipped too.
     /// In both cases every point nearer than an accepted one in `best` has
     /// been seen.
-    #[allow(clippy::too_many_arguments)] // the query's parts, each read in the loop
+    /// `(m, k)`: the accepted points wanted, and the nearest points they
+    /// are taken from.
     fn search(
         &self,
         q: &[f32; 3],
         skip: Option<usize>,
         accept: &impl Fn(usize) -> bool,
-        m: usize,
-        k: usize,
+        (m, k): (usize, usize),
         best: &mut Vec<Ranked>,
         mut kth: Option<&mut BinaryHeap<u32>>,
     ) -> bool {

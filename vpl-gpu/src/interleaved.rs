@@ -97,6 +97,23 @@ pub struct GpuInterleavedShader {
     publish: Option<Frames>,
 }
 
+/// The device parts of the visibility a gather reads: shadow maps (mode 0)
+/// or shadow rays against the device scene (mode 1).
+struct DeviceVisibility<'a> {
+    /// 0: shadow maps, 1: rays.
+    mode: u32,
+    /// The scene on the device.
+    scene: Arc<GpuScene>,
+    /// Ray offset.
+    eps: f32,
+    /// Shadow map resolution (1 for rays).
+    res: u32,
+    /// Shadow map bias scale (0 for rays).
+    bias: f32,
+    /// The maps, for mode 0.
+    maps: Option<&'a GpuShadowMaps>,
+}
+
 impl GpuInterleavedShader {
     /// A shader on `gpu` with `clamp`, the default filter and `seed`, as
     /// [`InterleavedShader::new`].
@@ -194,31 +211,26 @@ impl GpuInterleavedShader {
             return None;
         }
         let any = vis.as_any();
-        // (mode, scene, eps, res, bias scale, maps)
-        let (mode, scene, eps, res, bias, sm): (u32, Arc<GpuScene>, f32, u32, f32, Option<&GpuShadowMaps>) =
-            if let Some(sm) = any.downcast_ref::<GpuShadowMaps>() {
-                (0, sm.device_scene()?.clone(), sm.epsilon(), sm.resolution(), sm.bias_scale, Some(sm))
-            } else if let Some(rt) = any.downcast_ref::<GpuRayTraced>() {
-                let (s, eps) = rt.device_scene()?;
-                (1, s.clone(), *eps, 1, 0.0, None)
-            } else {
-                return None;
-            };
-        Some(self.run(gbuf, vpls, mode, &scene, eps, res, bias, sm))
+        let on_device = if let Some(sm) = any.downcast_ref::<GpuShadowMaps>() {
+            DeviceVisibility {
+                mode: 0,
+                scene: sm.device_scene()?.clone(),
+                eps: sm.epsilon(),
+                res: sm.resolution(),
+                bias: sm.bias_scale,
+                maps: Some(sm),
+            }
+        } else if let Some(rt) = any.downcast_ref::<GpuRayTraced>() {
+            let (scene, eps) = rt.device_scene()?;
+            DeviceVisibility { mode: 1, scene: scene.clone(), eps: *eps, res: 1, bias: 0.0, maps: None }
+        } else {
+            return None;
+        };
+        Some(self.run(gbuf, vpls, &on_device))
     }
 
-    #[allow(clippy::too_many_arguments)] // the visibility's device parts, unpacked at the one call
-    fn run(
-        &mut self,
-        gbuf: &GBuffer,
-        vpls: &VplSet,
-        mode: u32,
-        scene: &GpuScene,
-        eps: f32,
-        res: u32,
-        bias: f32,
-        sm: Option<&GpuShadowMaps>,
-    ) -> Result<Image, GpuError> {
+    fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &DeviceVisibility) -> Result<Image, GpuError> {
+        let &DeviceVisibility { mode, ref scene, eps, res, bias, maps: sm } = vis;
         let t0 = Instant::now();
         self.subset_buffers(vpls.len());
         self.kernels();

@@ -10,6 +10,15 @@ use vpl_core::glam::Vec3;
 use vpl_core::sampling::{cosine_hemisphere, power_heuristic};
 use vpl_core::{LocalFrame, Mode, Ray, RngStream, Scene, SurfacePoint};
 
+/// Which paths a walk counts: those whose number of scattering vertices
+/// lies in `min_k..=max_k`, their connections clamped by `clamp`.
+#[derive(Clone, Copy, Debug)]
+struct Counted {
+    min_k: u32,
+    max_k: u32,
+    clamp: Option<GeometryClamp>,
+}
+
 /// A path tracer configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathTracer {
@@ -67,7 +76,7 @@ impl PathTracer {
         if min_k == 0 {
             l += scene.emitted(&hit.point, -ray.d);
         }
-        l + self.walk(scene, hit.point, -ray.d, 0, min_k, max_k, self.clamp, rng)
+        l + self.walk(scene, hit.point, -ray.d, 0, Counted { min_k, max_k, clamp: self.clamp }, rng)
     }
 
     /// Exitant radiance (emission excluded) of surface point `y` toward `wo`,
@@ -75,26 +84,16 @@ impl PathTracer {
     /// scattering vertices after `y` (0 = direct light at `y` only).
     #[inline]
     pub fn reflected(&self, scene: &Scene, y: &SurfacePoint, wo: Vec3, max_bounces: u32, rng: &mut RngStream) -> Vec3 {
-        self.walk(scene, *y, wo, 0, 1, 1 + max_bounces, None, rng)
+        self.walk(scene, *y, wo, 0, Counted { min_k: 1, max_k: 1 + max_bounces, clamp: None }, rng)
     }
 
     /// Continues a path that has reached surface point `sp` from direction
     /// `wo` (pointing away from `sp`) after `k` scattering vertices; returns
     /// the radiance the rest of the path brings, counting paths whose total
     /// number of scattering vertices lies in `min_k..=max_k`.
-    #[allow(clippy::too_many_arguments)] // the path's state (point, direction, vertices) and its limits: the loop's variables
     #[allow(clippy::collapsible_if)] // each condition of next-event estimation on its own line, as the estimator reads
-    fn walk(
-        &self,
-        scene: &Scene,
-        mut sp: SurfacePoint,
-        mut wo: Vec3,
-        mut k: u32,
-        min_k: u32,
-        max_k: u32,
-        clamp: Option<GeometryClamp>,
-        rng: &mut RngStream,
-    ) -> Vec3 {
+    fn walk(&self, scene: &Scene, mut sp: SurfacePoint, mut wo: Vec3, mut k: u32, counted: Counted, rng: &mut RngStream) -> Vec3 {
+        let Counted { min_k, max_k, clamp } = counted;
         let eps = scene.epsilon();
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
@@ -105,7 +104,7 @@ impl PathTracer {
             }
             if scene.material(&sp).layered.is_some() {
                 // From here on the path follows the κ-layered model (one layer per vertex).
-                return l + self.walk_layered(scene, sp, wo, k, min_k, max_k, clamp, beta, rng);
+                return l + self.walk_layered(scene, (sp, wo, k), counted, beta, rng);
             }
             if wo.dot(sp.ng) <= 0.0 {
                 if !scene.two_sided {
@@ -193,19 +192,15 @@ impl PathTracer {
     /// estimation, the others get light samples with MIS against their own
     /// lobe. A path that meets a dispersive surface draws a wavelength there
     /// and keeps it (lazy spectral rendering, Dammertz et al. 2010, §6).
-    #[allow(clippy::too_many_arguments)] // walk's state and limits, and the throughput it hands over
     fn walk_layered(
         &self,
         scene: &Scene,
-        mut sp: SurfacePoint,
-        mut wo: Vec3,
-        mut k: u32,
-        min_k: u32,
-        max_k: u32,
-        clamp: Option<GeometryClamp>,
+        (mut sp, mut wo, mut k): (SurfacePoint, Vec3, u32),
+        counted: Counted,
         mut beta: Vec3,
         rng: &mut RngStream,
     ) -> Vec3 {
+        let Counted { min_k, max_k, clamp } = counted;
         let eps = scene.epsilon();
         let mut l = Vec3::ZERO;
         let mut lambda: Option<f32> = None;

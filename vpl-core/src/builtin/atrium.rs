@@ -24,7 +24,7 @@ pub fn build() -> Builtin {
     let mut mesh = Mesh::default();
     let hx = 0.5 * LEN;
     let zo = COURT + GALLERY;
-    horizontal(&mut mesh, -hx, hx, -zo, zo, 0.0, true, floor);
+    horizontal(&mut mesh, (-hx, hx), (-zo, zo), 0.0, true, floor);
     // Back walls of the galleries, end walls (to three storeys).
     let top = 3.0 * STOREY;
     wall_z(&mut mesh, -zo, -hx, hx, 2.0 * STOREY, &[], stone);

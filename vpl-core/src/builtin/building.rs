@@ -31,8 +31,8 @@ pub fn build() -> Builtin {
     let (floor, wall, ceil, cabinet, lamp) = (0, 1, 2, 3, 4);
     let mut mesh = Mesh::default();
     let size = N as f32 * ROOM;
-    horizontal(&mut mesh, 0.0, size, 0.0, size, 0.0, true, floor);
-    horizontal(&mut mesh, 0.0, size, 0.0, size, H, false, ceil);
+    horizontal(&mut mesh, (0.0, size), (0.0, size), 0.0, true, floor);
+    horizontal(&mut mesh, (0.0, size), (0.0, size), H, false, ceil);
     // Outer walls closed; every inner wall has a doorway into each room pair it parts.
     let doors: Vec<(f32, f32, f32)> = (0..N).map(|k| ((k as f32 + 0.5) * ROOM, DOOR.0, DOOR.1)).collect();
     for k in 0..=N {

@@ -25,14 +25,14 @@ pub fn build() -> Builtin {
     ];
     let (paving, marble, plaster, roof) = (0, 1, 2, 3);
     let mut mesh = Mesh::default();
-    horizontal(&mut mesh, -HX - 6.0, HX + 6.0, -COURT, DEPTH, 0.0, true, paving);
+    horizontal(&mut mesh, (-HX - 6.0, HX + 6.0), (-COURT, DEPTH), 0.0, true, paving);
     // Back wall with two doorways into darkness, end walls of the portico.
     wall_z(&mut mesh, DEPTH, -HX, HX, H + 1.0, &[(-8.0, 1.6, 2.6), (8.0, 1.6, 2.6)], plaster);
     wall_x(&mut mesh, -HX, 0.0, DEPTH, H + 1.0, &[], plaster);
     wall_x(&mut mesh, HX, 0.0, DEPTH, H + 1.0, &[], plaster);
     // The rooms behind the doorways: closed boxes seen only through them.
     for xc in [-8.0f32, 8.0] {
-        horizontal(&mut mesh, xc - 2.0, xc + 2.0, DEPTH, DEPTH + 3.0, H, false, plaster);
+        horizontal(&mut mesh, (xc - 2.0, xc + 2.0), (DEPTH, DEPTH + 3.0), H, false, plaster);
         wall_z(&mut mesh, DEPTH + 3.0, xc - 2.0, xc + 2.0, H, &[], plaster);
         wall_x(&mut mesh, xc - 2.0, DEPTH, DEPTH + 3.0, H, &[], plaster);
         wall_x(&mut mesh, xc + 2.0, DEPTH, DEPTH + 3.0, H, &[], plaster);

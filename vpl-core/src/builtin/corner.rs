@@ -19,10 +19,10 @@ pub fn build() -> Builtin {
     let (floor, wall, ceil, crate_m) = (0, 1, 2, 3);
     let h = 3.0;
     let mut mesh = Mesh::default();
-    horizontal(&mut mesh, 0.0, 2.5, -14.0, 0.0, 0.0, true, floor);
-    horizontal(&mut mesh, 0.0, 12.0, 0.0, 2.5, 0.0, true, floor);
-    horizontal(&mut mesh, 0.0, 2.5, -14.0, 0.0, h, false, ceil);
-    horizontal(&mut mesh, 0.0, 12.0, 0.0, 2.5, h, false, ceil);
+    horizontal(&mut mesh, (0.0, 2.5), (-14.0, 0.0), 0.0, true, floor);
+    horizontal(&mut mesh, (0.0, 12.0), (0.0, 2.5), 0.0, true, floor);
+    horizontal(&mut mesh, (0.0, 2.5), (-14.0, 0.0), h, false, ceil);
+    horizontal(&mut mesh, (0.0, 12.0), (0.0, 2.5), h, false, ceil);
     wall_x(&mut mesh, 0.0, -14.0, 2.5, h, &[], wall); // outer wall of leg A and the corner
     wall_x(&mut mesh, 2.5, -14.0, 0.0, h, &[], wall); // inner wall of leg A
     wall_z(&mut mesh, -14.0, 0.0, 2.5, h, &[], wall); // far end of leg A

@@ -18,7 +18,7 @@ pub fn build() -> Builtin {
     ];
     let (ground, stone, plaster, roof) = (0, 1, 2, 3);
     let mut mesh = Mesh::default();
-    horizontal(&mut mesh, -60.0, 60.0, -60.0, 60.0, 0.0, true, ground);
+    horizontal(&mut mesh, (-60.0, 60.0), (-60.0, 60.0), 0.0, true, ground);
     let mut rng = stream(11, 0, Purpose::SCENE, 2);
     // A 6×6 grid of blocks of 12 m with 6 m streets; the four centre blocks are the square.
     for i in 0..6 {

@@ -42,12 +42,12 @@ pub fn build() -> Builtin {
     let (white, red, green, light, glass, mirror) = (0, 1, 2, 3, 4, 5);
     let mut mesh = Mesh::default();
     // Box x ∈ [−3, 3], y ∈ [0, 3], z ∈ [−3, 3]; the camera looks in from z = 7 through the open front.
-    horizontal(&mut mesh, -3.0, 3.0, -3.0, 3.0, 0.0, true, white);
-    horizontal(&mut mesh, -3.0, 3.0, -3.0, 3.0, 3.0, false, white);
+    horizontal(&mut mesh, (-3.0, 3.0), (-3.0, 3.0), 0.0, true, white);
+    horizontal(&mut mesh, (-3.0, 3.0), (-3.0, 3.0), 3.0, false, white);
     wall_z(&mut mesh, -3.0, -3.0, 3.0, 3.0, &[], white);
     wall_x(&mut mesh, -3.0, -3.0, 3.0, 3.0, &[], red);
     wall_x(&mut mesh, 3.0, -3.0, 3.0, 3.0, &[], green);
-    horizontal(&mut mesh, -0.6, 0.6, -0.6, 0.6, 2.99, false, light);
+    horizontal(&mut mesh, (-0.6, 0.6), (-0.6, 0.6), 2.99, false, light);
     // Mirror panel in front of the back wall.
     mesh.push_quad(
         Vec3::new(-2.5, 0.8, -2.98),

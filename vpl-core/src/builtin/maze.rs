@@ -58,8 +58,8 @@ pub fn build() -> Builtin {
     let (floor, wall, ceil, lamp) = (0, 1, 2, 3);
     let mut mesh = Mesh::default();
     let size = N as f32 * CELL;
-    horizontal(&mut mesh, 0.0, size, 0.0, size, 0.0, true, floor);
-    horizontal(&mut mesh, 0.0, size, 0.0, size, H, false, ceil);
+    horizontal(&mut mesh, (0.0, size), (0.0, size), 0.0, true, floor);
+    horizontal(&mut mesh, (0.0, size), (0.0, size), H, false, ceil);
     // Outer walls and closed inner walls, as thin boxes 0.2 m thick.
     let t = 0.1;
     let wall_box = |mesh: &mut Mesh, lo: Vec3, hi: Vec3| mesh.push_box(lo, hi, wall, true);

@@ -138,16 +138,16 @@ fn wall_z(mesh: &mut Mesh, z: f32, x0: f32, x1: f32, h: f32, doors: &[(f32, f32,
     wall(mesh, |x, y| Vec3::new(x, y, z), x0, x1, h, doors, m);
 }
 
-/// A horizontal rectangle at height `y` facing up (`up = true`) or down.
-#[allow(clippy::too_many_arguments)] // the rectangle's four bounds, height, side and material read best in place
-fn horizontal(mesh: &mut Mesh, x0: f32, x1: f32, z0: f32, z1: f32, y: f32, up: bool, m: u32) {
+/// A horizontal rectangle over `x0..x1` × `z0..z1` at height `y`, facing
+/// up (`up = true`) or down.
+fn horizontal(mesh: &mut Mesh, (x0, x1): (f32, f32), (z0, z1): (f32, f32), y: f32, up: bool, m: u32) {
     let (a, b, c, d) = (Vec3::new(x0, y, z0), Vec3::new(x0, y, z1), Vec3::new(x1, y, z1), Vec3::new(x1, y, z0));
     if up { mesh.push_quad(a, b, c, d, m) } else { mesh.push_quad(a, d, c, b, m) }
 }
 
 /// A square emissive panel of side `s` centred at (x, y, z), facing down.
 fn ceiling_lamp(mesh: &mut Mesh, x: f32, y: f32, z: f32, s: f32, m: u32) {
-    horizontal(mesh, x - 0.5 * s, x + 0.5 * s, z - 0.5 * s, z + 0.5 * s, y, false, m);
+    horizontal(mesh, (x - 0.5 * s, x + 0.5 * s), (z - 0.5 * s, z + 0.5 * s), y, false, m);
 }
 
 #[cfg(test)]

@@ -26,8 +26,8 @@ pub fn build() -> Builtin {
     let (floor, wall, ceil, desk, panel) = (0, 1, 2, 3, 4);
     let mut mesh = Mesh::default();
     let xo = 0.5 * W + ROOM;
-    horizontal(&mut mesh, -xo, xo, -L, 0.0, 0.0, true, floor);
-    horizontal(&mut mesh, -xo, xo, -L, 0.0, H, false, ceil);
+    horizontal(&mut mesh, (-xo, xo), (-L, 0.0), 0.0, true, floor);
+    horizontal(&mut mesh, (-xo, xo), (-L, 0.0), H, false, ceil);
     // Corridor walls with one door per room; room side walls; end walls.
     let doors: Vec<(f32, f32, f32)> = (0..6).map(|k| (-L + (k as f32 + 0.5) * PITCH, 1.2, 2.2)).collect();
     wall_x(&mut mesh, -0.5 * W, -L, 0.0, H, &doors, wall);

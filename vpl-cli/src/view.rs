@@ -76,24 +76,30 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if !exposure.is_finite() || exposure <= 0.0 {
         return Err(format!("--exposure must be positive, got {exposure}"));
     }
-    let options = vpl_viewer::ViewerOptions {
-        scene,
-        window: (window.0, window.1),
-        backend: match backend {
-            ViewBackendArg::Auto => vpl_viewer::BackendRequest::Auto,
-            ViewBackendArg::Cpu => vpl_viewer::BackendRequest::Cpu,
-            ViewBackendArg::Gpu => vpl_viewer::BackendRequest::Gpu,
-        },
-        scale,
+    let defaults = vpl_viewer::ViewerOptions::new(scene);
+    let pipeline = vpl_render::PipelineSpec {
         sampler,
-        split,
-        vpls,
+        budget: vpl_core::Budget { vpls, ..defaults.pipeline.budget },
         mode: mode_of(mode),
         seed,
+        backend: match backend {
+            ViewBackendArg::Auto => "auto",
+            ViewBackendArg::Cpu => "cpu",
+            ViewBackendArg::Gpu => "gpu",
+        }
+        .into(),
+        ..defaults.pipeline.clone()
+    };
+    let options = vpl_viewer::ViewerOptions {
+        window: (window.0, window.1),
+        pipeline,
+        scale,
+        split,
         exposure,
         reference,
         script,
         load: vpl_scene_io::LoadOptions { allow_outside, memory_limit: None },
+        ..defaults
     };
     let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
     if !quiet {

@@ -29,7 +29,7 @@
 
 use crate::backends::Backends;
 use crate::error::RenderError;
-use crate::renderer::Renderer;
+use crate::renderer::{Renderer, RendererBuilder};
 use crate::spec::{Clamp, ShadingSpec, VisibilitySpec};
 use std::fmt;
 use std::str::FromStr;
@@ -91,6 +91,13 @@ impl PipelineSpec {
     /// The renderer of this spec for frames of `scene`: its sampler from
     /// `registry`, its backend from `backends`.
     pub fn build(&self, registry: &Registry, backends: &Backends, scene: &Scene) -> Result<Renderer, RenderError> {
+        self.builder(registry, scene).boxed_backend(backends.instantiate(&self.backend)?).build()
+    }
+
+    /// A builder with every setting of this spec but the backend, for a
+    /// caller that holds its backend itself (the viewer, whose GPU backend
+    /// shares the window's device).
+    pub fn builder<'a>(&self, registry: &'a Registry, scene: &'a Scene) -> RendererBuilder<'a> {
         Renderer::builder(scene)
             .registry(registry)
             .budget(self.budget)
@@ -103,8 +110,6 @@ impl PipelineSpec {
             .mode(self.mode)
             .direct_samples(self.direct_samples)
             .seed(self.seed)
-            .boxed_backend(backends.instantiate(&self.backend)?)
-            .build()
     }
 }
 

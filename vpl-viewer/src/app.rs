@@ -48,7 +48,7 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     // library (either may print its own lines to stderr).
     #[cfg(target_os = "linux")]
     let system = crate::display::from_env().map_err(ViewerError::NoDisplay)?;
-    let (backend, renderer_line, default_scale) = choose_backend(options.backend)?;
+    let (backend, renderer_line, default_scale) = choose_backend(BackendRequest::named(&options.pipeline.backend)?)?;
     // The window presents the renderer's frames from its device when it can.
     #[cfg(feature = "gpu")]
     let shared = match &backend {
@@ -75,11 +75,11 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     let (jobs, job_rx) = mpsc::channel::<Job>();
     let (reply_tx, replies) = mpsc::channel::<Reply>();
     let worker_registry = registry.clone();
-    let seed = options.seed;
+    let pipeline = options.pipeline.clone();
     let worker = std::thread::Builder::new()
         .name("vpl-view render".into())
         .spawn(move || {
-            worker::run(job_rx, reply_tx, worker_registry, backend, seed, move || {
+            worker::run(job_rx, reply_tx, worker_registry, backend, pipeline, move || {
                 let _ = proxy.send_event(Wake);
             })
         })
@@ -465,23 +465,23 @@ impl State {
     ) -> State {
         let frame_count = setup.sequence.as_ref().map_or(1, |s| s.frame_count().max(1));
         let split = o.split.is_some();
-        let right = o.split.clone().unwrap_or_else(|| if o.sampler == "smc" { "ir".into() } else { "smc".into() });
+        let right = o.split.clone().unwrap_or_else(|| if o.pipeline.sampler == "smc" { "ir".into() } else { "smc".into() });
         let scripted = o.script.is_some();
         State {
             scene_name: setup.scene.name.clone(),
             scene_spec: o.scene.clone(),
             scene_dir: PathBuf::from("."),
-            seed: o.seed,
+            seed: o.pipeline.seed,
             names: registry.names().into_iter().map(str::to_string).collect(),
             cam: FlyCamera::from_camera(&setup.camera),
             speed: setup.scene.radius().max(1e-3) * 0.5,
             setup,
             renderer_line,
             window_size: o.window,
-            sides: [o.sampler, right],
+            sides: [o.pipeline.sampler, right],
             split,
-            vpls: o.vpls,
-            mode: o.mode,
+            vpls: o.pipeline.budget.vpls,
+            mode: o.pipeline.mode,
             scale,
             channel: Channel::Image,
             overlay: Overlay::Off,

@@ -81,12 +81,14 @@ pub mod worker;
 pub use error::ViewerError;
 pub use script::{Script, ScriptError, Step};
 
-use vpl_core::Mode;
+use vpl_core::{Budget, Mode};
+use vpl_render::PipelineSpec;
 use vpl_sampling::Registry;
 
-/// Where the renderer runs.
+/// Where the renderer runs: the pipeline's `backend`, `auto`, `cpu` or
+/// `gpu`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum BackendRequest {
+pub(crate) enum BackendRequest {
     /// The GPU when there is an adapter, the CPU otherwise.
     #[default]
     Auto,
@@ -96,6 +98,18 @@ pub enum BackendRequest {
     Gpu,
 }
 
+impl BackendRequest {
+    /// The request a pipeline's backend name makes.
+    pub(crate) fn named(name: &str) -> Result<BackendRequest, ViewerError> {
+        match name {
+            "auto" => Ok(BackendRequest::Auto),
+            "cpu" => Ok(BackendRequest::Cpu),
+            "gpu" => Ok(BackendRequest::Gpu),
+            other => Err(ViewerError::Invalid(format!("the viewer runs on backend auto, cpu or gpu, not '{other}'"))),
+        }
+    }
+}
+
 /// How the viewer starts.
 #[derive(Clone, Debug)]
 pub struct ViewerOptions {
@@ -103,21 +117,18 @@ pub struct ViewerOptions {
     pub scene: String,
     /// Window size in pixels.
     pub window: (u32, u32),
-    /// Where the renderer runs.
-    pub backend: BackendRequest,
+    /// The pipeline of the left (or only) side: sampler, its parameters,
+    /// VPL budget, visibility, shading, clamp, light paths, seed, and where
+    /// it runs (`backend`: `auto`, the GPU when there is an adapter, else
+    /// the CPU; `cpu`; `gpu`). The panel changes the sampler, the budget
+    /// and the light paths; the parameters go to the pipeline's own sampler
+    /// (one chosen in the panel starts from its defaults).
+    pub pipeline: PipelineSpec,
     /// Render resolution over the view's size (default ½ on the GPU, ¼ on
     /// the CPU).
     pub scale: Option<f32>,
-    /// Sampler of the left (or only) side.
-    pub sampler: String,
     /// Sampler of the right side of a split view.
     pub split: Option<String>,
-    /// VPL budget of each side.
-    pub vpls: usize,
-    /// Which light paths the frames include.
-    pub mode: Mode,
-    /// Seed of the renderers.
-    pub seed: u64,
     /// Exposure of the tone mapping.
     pub exposure: f32,
     /// Accumulate the path tracer's reference while the camera stands still
@@ -131,18 +142,22 @@ pub struct ViewerOptions {
 }
 
 impl ViewerOptions {
-    /// The defaults for `scene`: a 1280×720 window, IR with 256 VPLs, full light.
+    /// The defaults for `scene`: a 1280×720 window, IR with 256 VPLs, full
+    /// light, on the GPU when there is one.
     pub fn new(scene: impl Into<String>) -> ViewerOptions {
         ViewerOptions {
             scene: scene.into(),
             window: (1280, 720),
-            backend: BackendRequest::Auto,
+            pipeline: PipelineSpec {
+                sampler: "ir".into(),
+                budget: Budget { vpls: 256, ..PipelineSpec::default().budget },
+                mode: Mode::Full,
+                seed: 0,
+                backend: "auto".into(),
+                ..PipelineSpec::default()
+            },
             scale: None,
-            sampler: "ir".into(),
             split: None,
-            vpls: 256,
-            mode: Mode::Full,
-            seed: 0,
             exposure: 1.0,
             reference: false,
             script: None,
@@ -171,12 +186,13 @@ pub struct Summary {
 
 /// Opens the viewer's window and runs until it is closed (or the script ends).
 pub fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, ViewerError> {
-    for name in std::iter::once(&options.sampler).chain(options.split.as_ref()) {
+    for name in std::iter::once(&options.pipeline.sampler).chain(options.split.as_ref()) {
         if !registry.contains(name) {
             return Err(ViewerError::UnknownSampler { name: name.clone(), known: registry.names().join(", ") });
         }
     }
-    if options.vpls == 0 {
+    BackendRequest::named(&options.pipeline.backend)?;
+    if options.pipeline.budget.vpls == 0 {
         return Err(ViewerError::Invalid("the VPL budget must be positive".into()));
     }
     if let Some(s) = options.scale.filter(|s| !(s.is_finite() && *s > 0.0 && *s <= 1.0)) {

@@ -12,9 +12,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
 use std::time::{Duration, Instant};
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, Image, Mode, Scene};
+use vpl_core::{Camera, Image, Mode, Params, Scene};
 use vpl_pathtrace::{PathTracer, RenderSettings};
-use vpl_render::{Backend, FrameOutput, ReadBack, RenderError, Renderer};
+use vpl_render::{Backend, FrameOutput, PipelineSpec, ReadBack, RenderError, Renderer};
 use vpl_sampling::Registry;
 
 /// What a side renders with: a change rebuilds its renderer (and restarts
@@ -178,7 +178,15 @@ struct Side {
 
 /// Runs jobs from `jobs` until the window hangs up; calls `wake` after each
 /// reply so the window redraws.
-pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, backend: BackendChoice, seed: u64, wake: impl Fn()) {
+pub fn run(
+    jobs: Receiver<Job>,
+    replies: Sender<Reply>,
+    registry: Registry,
+    backend: BackendChoice,
+    pipeline: PipelineSpec,
+    wake: impl Fn(),
+) {
+    let seed = pipeline.seed;
     let mut sides: Vec<Option<Side>> = Vec::new();
     let mut accumulation: Option<Accumulation> = None;
     // One reply per job: the window sends the next job when this one is answered.
@@ -186,7 +194,7 @@ pub fn run(jobs: Receiver<Job>, replies: Sender<Reply>, registry: Registry, back
         // A panic in a stage must not leave the window waiting for a reply
         // that never comes: it is a failed frame, and the sides start afresh.
         let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let frame = render_job(&job, &mut sides, &registry, &backend, seed)?;
+            let frame = render_job(&job, &mut sides, &registry, &backend, &pipeline)?;
             let reference = job.reference.map(|spec| accumulate(&job, &spec, &mut accumulation, seed));
             Ok((frame, reference))
         }));
@@ -295,7 +303,7 @@ fn render_job(
     sides: &mut Vec<Option<Side>>,
     registry: &Registry,
     backend: &BackendChoice,
-    seed: u64,
+    pipeline: &PipelineSpec,
 ) -> Result<Vec<SideResult>, Option<String>> {
     sides.resize_with(job.sides.len().max(sides.len()), || None);
     let mut out = Vec::new();
@@ -306,15 +314,16 @@ fn render_job(
         let slot = &mut sides[k];
         if slot.as_ref().is_none_or(|s| s.spec != *spec) {
             let (backend, published) = backend.make();
-            let renderer = Renderer::builder(&job.scene)
-                .vpls(spec.vpls)
-                .sampler(spec.sampler.as_str())
-                .registry(registry)
-                .mode(spec.mode)
-                .seed(seed)
-                .boxed_backend(backend)
-                .build()
-                .map_err(|e| Some(format!("{}: {e}", spec.sampler)))?;
+            // The pipeline with the panel's sampler, budget and light paths.
+            let mut side = pipeline.clone();
+            if side.sampler != spec.sampler {
+                side.params = Params::default();
+            }
+            side.sampler = spec.sampler.clone();
+            side.budget.vpls = spec.vpls;
+            side.mode = spec.mode;
+            let renderer =
+                side.builder(registry, &job.scene).boxed_backend(backend).build().map_err(|e| Some(format!("{}: {e}", spec.sampler)))?;
             *slot = Some(Side { spec: spec.clone(), renderer, index: 0, previous: None, published });
         }
         let side = slot.as_mut().expect("built above");

@@ -148,7 +148,9 @@ fn a_split_with_a_side_on_the_host_comes_back_whole() {
     let (jobs, job_rx) = mpsc::channel();
     let (reply_tx, replies) = mpsc::channel();
     let registry = vpl_sampling::Registry::builtin();
-    let thread = std::thread::spawn(move || worker::run(job_rx, reply_tx, registry, BackendChoice::Gpu(gpu), 1, || {}));
+    let thread = std::thread::spawn(move || {
+        worker::run(job_rx, reply_tx, registry, BackendChoice::Gpu(gpu), vpl_render::PipelineSpec { seed: 1, ..Default::default() }, || {})
+    });
     let scene = Arc::new(setup.scene.clone());
     for (pair, on_device) in [(["smc", "ir"], true), (["smc", "rr"], false)] {
         let sides = pair.map(|s| SideSpec { sampler: s.into(), vpls: 32, mode: Mode::Full, resolution: (48, 36) }).to_vec();

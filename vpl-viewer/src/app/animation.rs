@@ -1,0 +1,95 @@
+//! The animation: playing the sequence, its frames, and a light moved by
+//! hand.
+
+use super::*;
+
+impl State {
+    /// Advances the animation and the keyboard flight by the time since the last tick.
+    pub(super) fn tick(&mut self, ctx: &egui::Context) {
+        let now = Instant::now();
+        let dt = (now - self.last_tick).as_secs_f32().min(0.1);
+        self.last_tick = now;
+        if self.recording.is_some() {
+            let pose = self.pose();
+            if let Some((start, r)) = &mut self.recording {
+                r.push((now - *start).as_secs_f32(), pose);
+            }
+        }
+        if self.playing
+            && let Some(seq) = &self.setup.sequence
+        {
+            self.play_clock += dt as f64;
+            let f = ((self.play_clock * seq.fps as f64) as u64 % self.frame_count as u64) as u32;
+            if f != self.anim_frame {
+                self.set_anim_frame(f);
+            }
+        }
+        if ctx.wants_keyboard_input() {
+            return;
+        }
+        let (mut f, mut r, mut u, fast) = ctx.input(|i| {
+            let k = |key| if i.key_down(key) { 1.0f32 } else { 0.0 };
+            (k(egui::Key::W) - k(egui::Key::S), k(egui::Key::D) - k(egui::Key::A), k(egui::Key::E) - k(egui::Key::Q), i.modifiers.shift)
+        });
+        if f != 0.0 || r != 0.0 || u != 0.0 {
+            let step = self.speed * dt * if fast { 4.0 } else { 1.0 };
+            f *= step;
+            r *= step;
+            u *= step;
+            self.cam.fly(f, r, u);
+            self.changed(false);
+        }
+    }
+
+    pub(super) fn set_anim_frame(&mut self, f: u32) {
+        self.anim_frame = f.min(self.frame_count - 1);
+        if self.follow_camera
+            && let Ok(c) = self.setup.camera_at_frame(self.anim_frame)
+        {
+            self.cam = FlyCamera::from_camera(&c);
+        }
+        self.changed(false);
+    }
+
+    /// Keeps redrawing without input: keys held, an animation playing, a
+    /// frame in flight is answered by a wake-up instead.
+    pub(super) fn wants_ticks(&self, ctx: &egui::Context) -> bool {
+        self.playing
+            || ctx.input(|i| {
+                [egui::Key::W, egui::Key::A, egui::Key::S, egui::Key::D, egui::Key::Q, egui::Key::E].iter().any(|k| i.key_down(*k))
+            })
+    }
+
+    /// Moves the first point or spot light in the view plane by a drag of
+    /// `(dx, dy)` view pixels (turns a directional light).
+    pub(super) fn move_light(&mut self, dx: f32, dy: f32) {
+        let view_w = self.view_pixels().0.max(1.0);
+        let lights = self
+            .manual_lights
+            .get_or_insert_with(|| self.scene_cache.as_ref().map_or_else(|| self.setup.scene.extra_lights(), |(_, s)| s.extra_lights()));
+        let right = self.cam.right();
+        let up = right.cross(self.cam.forward).normalize_or(Vec3::Y);
+        let fov = self.setup.camera.fov_deg.to_radians();
+        let moved = lights.iter_mut().find_map(|l| match l {
+            Light::Point { position, .. } | Light::Spot { position, .. } => {
+                let dist = (*position - self.cam.origin).dot(self.cam.forward).abs().max(1e-3);
+                let per_px = 2.0 * dist * (0.5 * fov).tan() / view_w;
+                *position += (right * dx - up * dy) * per_px;
+                Some(())
+            }
+            Light::Directional { direction, .. } => {
+                let turn = vpl_core::glam::Quat::from_axis_angle(self.cam.up, -dx * 0.005)
+                    * vpl_core::glam::Quat::from_axis_angle(right, -dy * 0.005);
+                *direction = (turn * *direction).normalize_or(*direction);
+                Some(())
+            }
+            _ => None,
+        });
+        if moved.is_some() {
+            self.lights_version += 1;
+            self.changed(false);
+        } else {
+            self.status_line = Some("the scene has no point, spot or directional light to move".into());
+        }
+    }
+}

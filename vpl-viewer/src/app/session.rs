@@ -1,0 +1,161 @@
+//! The scripted session: its steps, run one a frame, and the screenshots
+//! it writes.
+
+use super::*;
+
+impl State {
+    /// Runs the script's steps up to the next wait (after the first frame).
+    pub(super) fn advance_script(&mut self) {
+        if !self.scripted || self.frames_shown == 0 || self.pending_shot.is_some() || self.quit {
+            return;
+        }
+        while self.waiting == 0 {
+            let Some(step) = self.script.pop_front() else {
+                self.quit = true;
+                return;
+            };
+            match step {
+                Step::Frames(n) => self.waiting = n,
+                Step::Sampler(name) => {
+                    if !self.check_sampler(&name) {
+                        return;
+                    }
+                    self.sides[0] = name;
+                    self.changed(true);
+                }
+                Step::Split(name) => {
+                    if let Some(name) = name {
+                        if !self.check_sampler(&name) {
+                            return;
+                        }
+                        self.sides[1] = name;
+                        self.split = true;
+                    } else {
+                        self.split = false;
+                    }
+                    self.changed(true);
+                }
+                Step::Overlay(o) => {
+                    self.overlay = o;
+                    self.recompose = true;
+                }
+                Step::Show(c) => {
+                    self.channel = c;
+                    self.recompose = true;
+                }
+                Step::Mode(m) => {
+                    self.mode = m;
+                    self.changed(true);
+                }
+                Step::Vpls(n) => {
+                    self.vpls = n;
+                    self.changed(true);
+                }
+                Step::Orbit(yaw, pitch) => {
+                    self.cam.orbit(yaw.to_radians(), pitch.to_radians());
+                    self.changed(true);
+                }
+                Step::Reference(on) => self.set_reference(on),
+                Step::Pick(None) => {
+                    self.picked = None;
+                    self.refresh_map();
+                }
+                Step::Pick(Some((fx, fy))) => {
+                    let Some(left) = self.last.first() else { continue };
+                    let (w, h) = (left.out.image.width as f32, left.out.image.height as f32);
+                    self.pick_at(fx * w, fy * h, f32::INFINITY);
+                    if self.picked.is_none() {
+                        self.fail(ViewerError::Render(format!("pick {fx} {fy}: the view shows no VPL")));
+                        return;
+                    }
+                }
+                Step::RecordStart => self.record_start(),
+                Step::RecordStop(path) => {
+                    if let Err(e) = self.record_stop(&path) {
+                        self.fail(e);
+                        return;
+                    }
+                }
+                Step::Screenshot(path) => {
+                    self.pending_shot = Some(path);
+                    return;
+                }
+                Step::Quit => {
+                    self.script.clear();
+                    self.quit = true;
+                    return;
+                }
+            }
+        }
+    }
+
+    pub(super) fn check_sampler(&mut self, name: &str) -> bool {
+        if self.names.iter().any(|n| n == name) {
+            return true;
+        }
+        self.fail(ViewerError::UnknownSampler { name: name.into(), known: self.names.join(", ") });
+        false
+    }
+
+    /// Writes a screenshot: the window's pixels, the view's values, and
+    /// where the view and the split lie in the window.
+    pub(super) fn write_shot(&self, path: &Path, window: (u32, u32, Vec<u8>)) -> Result<PathBuf, ViewerError> {
+        let with = |ext: &str| {
+            let mut s = OsString::from(path.as_os_str());
+            s.push(ext);
+            PathBuf::from(s)
+        };
+        let write_err = |p: &Path, e: &dyn std::fmt::Display| ViewerError::Write { path: p.to_path_buf(), reason: e.to_string() };
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| write_err(dir, &e))?;
+        }
+        let (w, h, rgb) = window;
+        let png = with(".png");
+        vpl_scene_io::write_png_rgb8(&png, w, h, &rgb)?;
+        let exr = with(".exr");
+        match &self.composite {
+            Some(c) if c.hdr.on_host() => c.hdr.write_exr(&exr)?,
+            // Composed on the device: the values come from the frames read back.
+            Some(_) => {
+                let hosted = self.on_host();
+                if let Some((left, lg)) = hosted.first() {
+                    let right = hosted.get(1).map(|(s, g)| SideFrame { gbuffer: g, ..side(s) });
+                    let c = compose(SideFrame { gbuffer: lg, ..side(left) }, right, &self.look());
+                    c.hdr.write_exr(&exr)?;
+                }
+            }
+            None => {}
+        }
+        let ppp = self.pixels_per_point;
+        let view = self.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
+        let split = self.composite.as_ref().and_then(|c| c.split_x.map(|s| view[0] + (s as f32 / c.width as f32) * (view[2] - view[0])));
+        let sides: Vec<String> = self.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
+        let res = self.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
+        let json = format!(
+            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {},\n  \"reference_passes\": {},\n  \"picked\": {},\n  \"shadow_map\": {}\n}}\n",
+            view[0],
+            view[1],
+            view[2],
+            view[3],
+            split.map_or("null".to_string(), |s| format!("{s:.1}")),
+            res.0,
+            res.1,
+            sides.join(", "),
+            self.channel.name(),
+            self.overlay.name(),
+            self.frames_shown,
+            self.reference.as_ref().map_or(0, |r| r.passes),
+            self.picked.map_or("null".to_string(), |(k, slot)| format!("[{k}, {slot}]")),
+            self.map_rect.map_or("null".to_string(), |r| format!(
+                "[{:.1}, {:.1}, {:.1}, {:.1}]",
+                r.min.x * ppp,
+                r.min.y * ppp,
+                r.max.x * ppp,
+                r.max.y * ppp
+            ))
+        );
+        let j = with(".json");
+        vpl_core::image::write_atomic(&j, json.as_bytes())?;
+        Ok(png)
+    }
+}

@@ -3,24 +3,36 @@
 
 use super::*;
 
+/// The animation: the sequence's frames, playing them, and lights moved by hand.
+pub(super) struct Animation {
+    pub(super) frame_count: u32,
+    pub(super) anim_frame: u32,
+    pub(super) playing: bool,
+    pub(super) play_clock: f64,
+    pub(super) follow_camera: bool,
+    pub(super) manual_lights: Option<Vec<Light>>,
+    pub(super) lights_version: u64,
+    pub(super) scene_cache: Option<((u32, u64), Arc<Scene>)>,
+}
+
 impl State {
     /// Advances the animation and the keyboard flight by the time since the last tick.
     pub(super) fn tick(&mut self, ctx: &egui::Context) {
         let now = Instant::now();
         let dt = (now - self.last_tick).as_secs_f32().min(0.1);
         self.last_tick = now;
-        if self.recording.is_some() {
+        if self.rec.recording.is_some() {
             let pose = self.pose();
-            if let Some((start, r)) = &mut self.recording {
+            if let Some((start, r)) = &mut self.rec.recording {
                 r.push((now - *start).as_secs_f32(), pose);
             }
         }
-        if self.playing
+        if self.anim.playing
             && let Some(seq) = &self.setup.sequence
         {
-            self.play_clock += dt as f64;
-            let f = ((self.play_clock * seq.fps as f64) as u64 % self.frame_count as u64) as u32;
-            if f != self.anim_frame {
+            self.anim.play_clock += dt as f64;
+            let f = ((self.anim.play_clock * seq.fps as f64) as u64 % self.anim.frame_count as u64) as u32;
+            if f != self.anim.anim_frame {
                 self.set_anim_frame(f);
             }
         }
@@ -42,9 +54,9 @@ impl State {
     }
 
     pub(super) fn set_anim_frame(&mut self, f: u32) {
-        self.anim_frame = f.min(self.frame_count - 1);
-        if self.follow_camera
-            && let Ok(c) = self.setup.camera_at_frame(self.anim_frame)
+        self.anim.anim_frame = f.min(self.anim.frame_count - 1);
+        if self.anim.follow_camera
+            && let Ok(c) = self.setup.camera_at_frame(self.anim.anim_frame)
         {
             self.cam = FlyCamera::from_camera(&c);
         }
@@ -54,7 +66,7 @@ impl State {
     /// Keeps redrawing without input: keys held, an animation playing, a
     /// frame in flight is answered by a wake-up instead.
     pub(super) fn wants_ticks(&self, ctx: &egui::Context) -> bool {
-        self.playing
+        self.anim.playing
             || ctx.input(|i| {
                 [egui::Key::W, egui::Key::A, egui::Key::S, egui::Key::D, egui::Key::Q, egui::Key::E].iter().any(|k| i.key_down(*k))
             })
@@ -64,9 +76,9 @@ impl State {
     /// `(dx, dy)` view pixels (turns a directional light).
     pub(super) fn move_light(&mut self, dx: f32, dy: f32) {
         let view_w = self.view_pixels().0.max(1.0);
-        let lights = self
-            .manual_lights
-            .get_or_insert_with(|| self.scene_cache.as_ref().map_or_else(|| self.setup.scene.extra_lights(), |(_, s)| s.extra_lights()));
+        let lights = self.anim.manual_lights.get_or_insert_with(|| {
+            self.anim.scene_cache.as_ref().map_or_else(|| self.setup.scene.extra_lights(), |(_, s)| s.extra_lights())
+        });
         let right = self.cam.right();
         let up = right.cross(self.cam.forward).normalize_or(Vec3::Y);
         let fov = self.setup.camera.fov_deg.to_radians();
@@ -86,7 +98,7 @@ impl State {
             _ => None,
         });
         if moved.is_some() {
-            self.lights_version += 1;
+            self.anim.lights_version += 1;
             self.changed(false);
         } else {
             self.status_line = Some("the scene has no point, spot or directional light to move".into());

@@ -4,33 +4,59 @@
 
 use super::*;
 
+/// The render thread: the jobs sent to it, its replies, and the frame in flight.
+pub(super) struct Link {
+    pub(super) jobs: Sender<Job>,
+    pub(super) replies: Receiver<Reply>,
+    pub(super) generation: u64,
+    pub(super) in_flight: Option<(u64, Arc<AtomicBool>, Instant)>,
+    pub(super) stalled: bool,
+}
+
+/// The last frame and what shows it: the composed view, its textures, and the plots' history.
+pub(super) struct Picture {
+    pub(super) last: Vec<SideResult>,
+    pub(super) composite: Option<Composite>,
+    pub(super) recompose: bool,
+    pub(super) texture: Option<egui::TextureHandle>,
+    /// What the view draws: `texture`'s id, or the device view's.
+    pub(super) view_texture: Option<egui::TextureId>,
+    /// The window presents from the renderer's device: frames stay there.
+    pub(super) resident: bool,
+    /// Frames composed on the device.
+    pub(super) device_frames: u64,
+    pub(super) view_rect: Option<egui::Rect>,
+    pub(super) pixels_per_point: f32,
+    pub(super) history: [History; 2],
+}
+
 impl State {
     pub(super) fn scene(&mut self) -> Result<Arc<Scene>, ViewerError> {
-        let key = (self.anim_frame, self.lights_version);
-        if let Some((k, s)) = &self.scene_cache
+        let key = (self.anim.anim_frame, self.anim.lights_version);
+        if let Some((k, s)) = &self.anim.scene_cache
             && *k == key
         {
             return Ok(s.clone());
         }
-        let (mut scene, _) = self.setup.frame(self.anim_frame)?;
-        if let Some(l) = &self.manual_lights {
+        let (mut scene, _) = self.setup.frame(self.anim.anim_frame)?;
+        if let Some(l) = &self.anim.manual_lights {
             scene = scene.with_lights(l.clone())?;
         }
         let scene = Arc::new(scene);
-        self.scene_cache = Some((key, scene.clone()));
+        self.anim.scene_cache = Some((key, scene.clone()));
         Ok(scene)
     }
 
     /// Sends the next job when none is in flight: frames render continuously.
     pub(super) fn submit(&mut self) {
-        if self.in_flight.is_some() || self.stalled || self.quit {
+        if self.link.in_flight.is_some() || self.link.stalled || self.session.quit {
             return;
         }
         let scene = match self.scene() {
             Ok(s) => s,
             Err(e) => {
                 self.error_line = Some(e.to_string());
-                self.stalled = true;
+                self.link.stalled = true;
                 return;
             }
         };
@@ -38,20 +64,20 @@ impl State {
             Ok(c) => c,
             Err(e) => {
                 self.error_line = Some(format!("camera: {e}"));
-                self.stalled = true;
+                self.link.stalled = true;
                 return;
             }
         };
-        let time = self.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim_frame));
+        let time = self.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim.anim_frame));
         let cancel = Arc::new(AtomicBool::new(false));
-        let reference = self.reference_on.then_some(ReferenceSpec {
+        let reference = self.inspect.reference_on.then_some(ReferenceSpec {
             mode: self.mode,
             max_depth: vpl_core::Budget::default().max_depth,
             budget: REFERENCE_BUDGET,
         });
-        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone(), reference, resident: self.resident };
-        if self.jobs.send(job).is_ok() {
-            self.in_flight = Some((self.generation, cancel, Instant::now()));
+        let job = Job { scene, camera, time, sides: self.specs(), cancel: cancel.clone(), reference, resident: self.picture.resident };
+        if self.link.jobs.send(job).is_ok() {
+            self.link.in_flight = Some((self.link.generation, cancel, Instant::now()));
         } else {
             self.fail(ViewerError::Render("the render thread stopped".into()));
         }
@@ -60,49 +86,49 @@ impl State {
     /// Takes the render thread's replies.
     pub(super) fn poll(&mut self) {
         loop {
-            let reply = match self.replies.try_recv() {
+            let reply = match self.link.replies.try_recv() {
                 Ok(r) => r,
                 Err(mpsc::TryRecvError::Empty) => break,
                 Err(mpsc::TryRecvError::Disconnected) => {
-                    self.in_flight = None;
+                    self.link.in_flight = None;
                     self.fail(ViewerError::Render("the render thread stopped".into()));
                     break;
                 }
             };
-            let Some((generation, _, _)) = self.in_flight.take() else { continue };
+            let Some((generation, _, _)) = self.link.in_flight.take() else { continue };
             match reply {
                 Reply::Frame { sides, reference } => {
                     let now = Instant::now();
                     self.first_frame_at.get_or_insert(now);
                     self.last_frame_at = Some(now);
                     self.frames_shown += 1;
-                    if generation == self.generation {
-                        self.waiting = self.waiting.saturating_sub(1);
+                    if generation == self.link.generation {
+                        self.session.waiting = self.session.waiting.saturating_sub(1);
                     }
-                    for (h, s) in self.history.iter_mut().zip(&sides) {
+                    for (h, s) in self.picture.history.iter_mut().zip(&sides) {
                         h.push(s);
                     }
-                    self.last = sides;
+                    self.picture.last = sides;
                     self.error_line = None;
-                    self.recompose = true;
+                    self.picture.recompose = true;
                     match reference {
-                        Some(Ok(r)) => self.reference = Some(r),
+                        Some(Ok(r)) => self.inspect.reference = Some(r),
                         Some(Err(e)) => {
-                            self.reference = None;
+                            self.inspect.reference = None;
                             self.error_line = Some(e);
                         }
-                        None => self.reference = None,
+                        None => self.inspect.reference = None,
                     }
                     self.refresh_map();
                 }
                 Reply::Cancelled => {}
                 Reply::Failed(e) => {
-                    if self.scripted {
+                    if self.session.scripted {
                         self.fail(ViewerError::Render(e.clone()));
                     }
                     self.error_line = Some(e);
-                    if generation == self.generation {
-                        self.stalled = true;
+                    if generation == self.link.generation {
+                        self.link.stalled = true;
                     }
                 }
             }
@@ -112,7 +138,8 @@ impl State {
     /// The last frame's sides with their G-buffers on the host (read back
     /// where they stayed on the device).
     pub(super) fn on_host(&self) -> Vec<(SideResult, vpl_core::GBuffer)> {
-        self.last
+        self.picture
+            .last
             .iter()
             .map(|s| {
                 #[cfg(feature = "gpu")]
@@ -131,7 +158,7 @@ impl State {
             channel: self.channel,
             overlay: self.overlay,
             exposure: self.exposure,
-            reference: self.reference.as_ref().map(|r| &r.image),
+            reference: self.inspect.reference.as_ref().map(|r| &r.image),
             picked: self.pick(),
         }
     }
@@ -140,14 +167,14 @@ impl State {
     /// window shares that device and every side stayed there.
     #[cfg(feature = "gpu")]
     pub(super) fn compose_on_device(&mut self, gfx: &mut Gfx) {
-        let Some(view) = gfx.device_view.as_mut().filter(|_| self.recompose) else { return };
+        let Some(view) = gfx.device_view.as_mut().filter(|_| self.picture.recompose) else { return };
         let look = self.look();
-        match view.show(&gfx.device, &mut gfx.painter, &self.last, &look) {
+        match view.show(&gfx.device, &mut gfx.painter, &self.picture.last, &look) {
             Ok(Some((id, c))) => {
-                self.view_texture = Some(id);
-                self.composite = Some(c);
-                self.recompose = false;
-                self.device_frames += 1;
+                self.picture.view_texture = Some(id);
+                self.picture.composite = Some(c);
+                self.picture.recompose = false;
+                self.picture.device_frames += 1;
             }
             Ok(None) => {}
             Err(e) => self.error_line = Some(format!("view on the device: {e}")),
@@ -155,19 +182,20 @@ impl State {
     }
 
     pub(super) fn compose(&mut self, ctx: &egui::Context) {
-        if !self.recompose {
+        if !self.picture.recompose {
             return;
         }
-        self.recompose = false;
-        let Some(left) = self.last.first() else { return };
-        let right = self.last.get(1).filter(|r| r.out.image.width == left.out.image.width && r.out.image.height == left.out.image.height);
+        self.picture.recompose = false;
+        let Some(left) = self.picture.last.first() else { return };
+        let right =
+            self.picture.last.get(1).filter(|r| r.out.image.width == left.out.image.width && r.out.image.height == left.out.image.height);
         let c = compose(side(left), right.map(side), &self.look());
         let image = egui::ColorImage::from_rgba_unmultiplied([c.width as usize, c.height as usize], &c.rgba);
-        match &mut self.texture {
+        match &mut self.picture.texture {
             Some(t) => t.set(image, egui::TextureOptions::NEAREST),
-            None => self.texture = Some(ctx.load_texture("vpl-view", image, egui::TextureOptions::NEAREST)),
+            None => self.picture.texture = Some(ctx.load_texture("vpl-view", image, egui::TextureOptions::NEAREST)),
         }
-        self.view_texture = self.texture.as_ref().map(|t| t.id());
-        self.composite = Some(c);
+        self.picture.view_texture = self.picture.texture.as_ref().map(|t| t.id());
+        self.picture.composite = Some(c);
     }
 }

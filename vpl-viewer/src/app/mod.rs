@@ -38,10 +38,15 @@ mod picking;
 mod recording;
 mod session;
 
+use animation::Animation;
+use frames::{Link, Picture};
 use gfx::Gfx;
 #[cfg(feature = "gpu")]
 use history::host_frame;
 use history::{History, side};
+use picking::Inspection;
+use recording::Recordings;
+use session::Session;
 
 /// Width of the control panel in points.
 const PANEL_WIDTH: f32 = 330.0;
@@ -109,12 +114,12 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)));
     let App { st, gfx, .. } = app;
     drop(gfx);
-    if let Some((_, cancel, _)) = &st.in_flight {
+    if let Some((_, cancel, _)) = &st.link.in_flight {
         cancel.store(true, Ordering::Relaxed);
     }
     let summary = st.summary();
     let fatal = st.fatal;
-    drop(st.jobs);
+    drop(st.link.jobs);
     let _ = worker.join();
     looped?;
     match fatal {
@@ -172,6 +177,7 @@ type MapKey = (usize, usize, [f32; 6]);
 
 /// Everything but the window.
 struct State {
+    // The scene, the camera and the window.
     scene_name: String,
     scene_spec: String,
     scene_dir: PathBuf,
@@ -182,7 +188,7 @@ struct State {
     speed: f32,
     renderer_line: String,
     window_size: (u32, u32),
-    // What the frames are rendered with.
+    // What the frames are rendered with, and how they are shown.
     sides: [String; 2],
     split: bool,
     vpls: usize,
@@ -191,58 +197,26 @@ struct State {
     channel: Channel,
     overlay: Overlay,
     exposure: f32,
-    // Animation and a light moved by hand.
-    frame_count: u32,
-    anim_frame: u32,
-    playing: bool,
-    play_clock: f64,
-    follow_camera: bool,
-    manual_lights: Option<Vec<Light>>,
-    lights_version: u64,
-    scene_cache: Option<((u32, u64), Arc<Scene>)>,
-    // The render thread.
-    jobs: Sender<Job>,
-    replies: Receiver<Reply>,
-    generation: u64,
-    in_flight: Option<(u64, Arc<AtomicBool>, Instant)>,
-    stalled: bool,
-    // The last frame and its picture.
-    last: Vec<SideResult>,
-    composite: Option<Composite>,
-    recompose: bool,
-    texture: Option<egui::TextureHandle>,
-    /// What the view draws: `texture`'s id, or the device view's.
-    view_texture: Option<egui::TextureId>,
-    /// The window presents from the renderer's device: frames stay there.
-    resident: bool,
-    /// Frames composed on the device.
-    device_frames: u64,
-    view_rect: Option<egui::Rect>,
-    pixels_per_point: f32,
-    history: [History; 2],
-    // The reference, a picked VPL, a recording.
-    reference_on: bool,
-    reference: Option<Reference>,
-    picked: Option<(usize, usize)>,
-    map: Option<(MapKey, MapPicture)>,
-    map_texture: Option<egui::TextureHandle>,
-    map_rect: Option<egui::Rect>,
-    recording: Option<(Instant, Recorder)>,
-    recordings: u32,
+    // What the panel reports, and what the session did.
     error_line: Option<String>,
     status_line: Option<String>,
     frames_shown: u64,
     first_frame_at: Option<Instant>,
     last_frame_at: Option<Instant>,
     last_tick: Instant,
-    // The scripted session.
-    scripted: bool,
-    script: VecDeque<Step>,
-    waiting: u32,
-    pending_shot: Option<PathBuf>,
-    shots: u32,
-    quit: bool,
     fatal: Option<ViewerError>,
+    /// The animation: the sequence's frames, playing them, and lights moved by hand.
+    anim: Animation,
+    /// The render thread: the jobs sent to it, its replies, and the frame in flight.
+    link: Link,
+    /// The last frame and what shows it: the composed view, its textures, and the plots' history.
+    picture: Picture,
+    /// A picked VPL with its shadow map, and the path tracer's reference.
+    inspect: Inspection,
+    /// A path being recorded, and how many were written.
+    rec: Recordings,
+    /// The scripted session: its steps, the frames it waits for, its screenshots, and whether it ends.
+    session: Session,
 }
 
 impl State {
@@ -278,50 +252,46 @@ impl State {
             channel: Channel::Image,
             overlay: Overlay::Off,
             exposure: o.exposure,
-            frame_count,
-            anim_frame: 0,
-            playing: false,
-            play_clock: 0.0,
-            follow_camera: true,
-            manual_lights: None,
-            lights_version: 0,
-            scene_cache: None,
-            jobs,
-            replies,
-            generation: 0,
-            in_flight: None,
-            stalled: false,
-            last: Vec::new(),
-            composite: None,
-            recompose: false,
-            texture: None,
-            view_texture: None,
-            resident: false,
-            device_frames: 0,
-            view_rect: None,
-            pixels_per_point: 1.0,
-            history: [History::default(), History::default()],
-            reference_on: o.reference,
-            reference: None,
-            picked: None,
-            map: None,
-            map_texture: None,
-            map_rect: None,
-            recording: None,
-            recordings: 0,
             error_line: None,
             status_line: None,
             frames_shown: 0,
             first_frame_at: None,
             last_frame_at: None,
             last_tick: Instant::now(),
-            scripted,
-            script: o.script.map(|s| s.steps.into()).unwrap_or_default(),
-            waiting: 0,
-            pending_shot: None,
-            shots: 0,
-            quit: false,
             fatal: None,
+            anim: Animation {
+                frame_count,
+                anim_frame: 0,
+                playing: false,
+                play_clock: 0.0,
+                follow_camera: true,
+                manual_lights: None,
+                lights_version: 0,
+                scene_cache: None,
+            },
+            link: Link { jobs, replies, generation: 0, in_flight: None, stalled: false },
+            picture: Picture {
+                last: Vec::new(),
+                composite: None,
+                recompose: false,
+                texture: None,
+                view_texture: None,
+                resident: false,
+                device_frames: 0,
+                view_rect: None,
+                pixels_per_point: 1.0,
+                history: [History::default(), History::default()],
+            },
+            inspect: Inspection { reference_on: o.reference, reference: None, picked: None, map: None, map_texture: None, map_rect: None },
+            rec: Recordings { recording: None, recordings: 0 },
+            session: Session {
+                scripted,
+                script: o.script.map(|s| s.steps.into()).unwrap_or_default(),
+                waiting: 0,
+                pending_shot: None,
+                shots: 0,
+                quit: false,
+            },
         }
     }
 
@@ -335,7 +305,7 @@ impl State {
             fps,
             renderer: self.renderer_line.clone(),
             resolution: self.resolution(),
-            device_frames: self.device_frames,
+            device_frames: self.picture.device_frames,
         }
     }
 
@@ -343,15 +313,15 @@ impl State {
         if self.fatal.is_none() {
             self.fatal = Some(e);
         }
-        self.quit = true;
+        self.session.quit = true;
     }
 
     /// The view's size in pixels: the central panel's last size, or the
     /// window's less the panel before the first layout.
     fn view_pixels(&self) -> (f32, f32) {
-        match self.view_rect {
-            Some(r) => (r.width() * self.pixels_per_point, r.height() * self.pixels_per_point),
-            None => ((self.window_size.0 as f32 - PANEL_WIDTH * self.pixels_per_point).max(64.0), self.window_size.1 as f32),
+        match self.picture.view_rect {
+            Some(r) => (r.width() * self.picture.pixels_per_point, r.height() * self.picture.pixels_per_point),
+            None => ((self.window_size.0 as f32 - PANEL_WIDTH * self.picture.pixels_per_point).max(64.0), self.window_size.1 as f32),
         }
     }
 
@@ -370,9 +340,9 @@ impl State {
     /// renders with changed, so the frame in flight is stopped at once;
     /// otherwise (the camera, the light) only once it has run a while.
     fn changed(&mut self, hard: bool) {
-        self.generation += 1;
-        self.stalled = false;
-        if let Some((_, cancel, started)) = &self.in_flight
+        self.link.generation += 1;
+        self.link.stalled = false;
+        if let Some((_, cancel, started)) = &self.link.in_flight
             && (hard || started.elapsed() > CANCEL_AFTER)
         {
             cancel.store(true, Ordering::Relaxed);
@@ -386,13 +356,13 @@ impl App {
         let st = &mut self.st;
         st.poll();
         st.advance_script();
-        if st.quit {
+        if st.session.quit {
             el.exit();
             return;
         }
         let raw = gfx.egui.take_egui_input(&gfx.window);
         let ctx = gfx.egui.egui_ctx().clone();
-        st.pixels_per_point = ctx.pixels_per_point();
+        st.picture.pixels_per_point = ctx.pixels_per_point();
         st.tick(&ctx);
         #[cfg(feature = "gpu")]
         st.compose_on_device(gfx);
@@ -431,13 +401,13 @@ impl App {
             }
         }
         // A screenshot once the view shows a frame of what the script set up.
-        if st.view_texture.is_some()
-            && !st.recompose
-            && let Some(path) = st.pending_shot.take()
+        if st.picture.view_texture.is_some()
+            && !st.picture.recompose
+            && let Some(path) = st.session.pending_shot.take()
         {
             match gfx.capture(&prims, &sd).map_err(ViewerError::Surface).and_then(|px| st.write_shot(&path, px)) {
                 Ok(p) => st.status_line = Some(format!("wrote {}", p.display())),
-                Err(e) if st.scripted => {
+                Err(e) if st.session.scripted => {
                     st.fail(e);
                     el.exit();
                 }
@@ -449,7 +419,7 @@ impl App {
             gfx.painter.free_texture(id);
         }
         let delay = out.viewport_output.get(&egui::ViewportId::ROOT).map_or(Duration::MAX, |v| v.repaint_delay);
-        if st.wants_ticks(&ctx) || st.pending_shot.is_some() || delay.is_zero() {
+        if st.wants_ticks(&ctx) || st.session.pending_shot.is_some() || delay.is_zero() {
             el.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(16)));
             gfx.window.request_redraw();
         } else if delay < Duration::from_secs(1) {
@@ -469,7 +439,7 @@ impl ApplicationHandler<Wake> for App {
             Ok(g) => {
                 #[cfg(feature = "gpu")]
                 {
-                    self.st.resident = g.device_view.is_some();
+                    self.st.picture.resident = g.device_view.is_some();
                 }
                 g.window.request_redraw();
                 self.gfx = Some(g);
@@ -492,7 +462,7 @@ impl ApplicationHandler<Wake> for App {
         let response = gfx.egui.on_window_event(&gfx.window, &event);
         match event {
             WindowEvent::CloseRequested => {
-                self.st.quit = true;
+                self.st.session.quit = true;
                 el.exit();
             }
             WindowEvent::Resized(s) => {

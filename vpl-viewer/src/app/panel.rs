@@ -70,7 +70,7 @@ impl State {
             for (o, name) in [(Overlay::Off, "off"), (Overlay::Vpls, "VPLs"), (Overlay::Interleave, "interleaving")] {
                 if ui.selectable_label(self.overlay == o, name).clicked() {
                     self.overlay = o;
-                    self.recompose = true;
+                    self.picture.recompose = true;
                 }
             }
         });
@@ -83,9 +83,9 @@ impl State {
             .small(),
         );
         if let Some(p) = self.pick()
-            && let Some(v) = self.last.get(p.side).and_then(|s| s.out.vpls.get(p.slot)).copied()
+            && let Some(v) = self.picture.last.get(p.side).and_then(|s| s.out.vpls.get(p.slot)).copied()
         {
-            let sampler = self.last[p.side].spec.sampler.clone();
+            let sampler = self.picture.last[p.side].spec.sampler.clone();
             ui.horizontal(|ui| {
                 ui.label(
                     egui::RichText::new(format!(
@@ -99,21 +99,21 @@ impl State {
                     .small(),
                 );
                 if ui.small_button("unpick").clicked() {
-                    self.picked = None;
+                    self.inspect.picked = None;
                     self.refresh_map();
-                    self.recompose = true;
+                    self.picture.recompose = true;
                 }
             });
         }
         ui.horizontal(|ui| {
-            let mut on = self.reference_on;
+            let mut on = self.inspect.reference_on;
             if ui.checkbox(&mut on, "reference (path tracer while still)").changed() {
                 self.set_reference(on);
             }
         });
-        if let Some(r) = &self.reference {
+        if let Some(r) = &self.inspect.reference {
             let mut line = format!("reference: {} passes of 1 path per pixel", r.passes);
-            for sd in &self.last {
+            for sd in &self.picture.last {
                 if let Some((ratio, rmse)) = against_reference(&sd.out.image, &r.image) {
                     line.push_str(&format!(
                         "\n{}: mean {:.3}× the reference, RMS difference {:.3} of its mean",
@@ -135,28 +135,28 @@ impl State {
             let e = self.exposure;
             ui.add(egui::DragValue::new(&mut self.exposure).range(0.01..=100.0).speed(0.05));
             if self.channel != before || self.exposure != e {
-                self.recompose = true;
+                self.picture.recompose = true;
             }
         });
-        if self.frame_count > 1 {
+        if self.anim.frame_count > 1 {
             ui.horizontal(|ui| {
-                if ui.button(if self.playing { "pause" } else { "play" }).clicked() {
-                    self.playing = !self.playing;
+                if ui.button(if self.anim.playing { "pause" } else { "play" }).clicked() {
+                    self.anim.playing = !self.anim.playing;
                     if let Some(seq) = &self.setup.sequence {
-                        self.play_clock = self.anim_frame as f64 / seq.fps as f64;
+                        self.anim.play_clock = self.anim.anim_frame as f64 / seq.fps as f64;
                     }
                 }
-                let mut f = self.anim_frame;
-                ui.add(egui::Slider::new(&mut f, 0..=self.frame_count - 1).text("frame"));
-                if f != self.anim_frame {
-                    self.playing = false;
+                let mut f = self.anim.anim_frame;
+                ui.add(egui::Slider::new(&mut f, 0..=self.anim.frame_count - 1).text("frame"));
+                if f != self.anim.anim_frame {
+                    self.anim.playing = false;
                     self.set_anim_frame(f);
                 }
             });
-            ui.checkbox(&mut self.follow_camera, "camera follows the animation");
+            ui.checkbox(&mut self.anim.follow_camera, "camera follows the animation");
         }
         ui.separator();
-        for s in &self.last {
+        for s in &self.picture.last {
             let t = s.out.timings;
             ui.label(
                 egui::RichText::new(format!(
@@ -175,7 +175,7 @@ impl State {
                 .small(),
             );
         }
-        let names: Vec<String> = self.last.iter().map(|s| s.spec.sampler.clone()).collect();
+        let names: Vec<String> = self.picture.last.iter().map(|s| s.spec.sampler.clone()).collect();
         let plot = |ui: &mut egui::Ui, id: &str, title: &str, columns: &[(usize, &str)], history: &[History; 2]| {
             ui.label(title);
             egui_plot::Plot::new(id)
@@ -196,28 +196,28 @@ impl State {
                 });
         };
         let stages: Vec<(usize, &str)> = (1..=6).map(|c| (c, History::COLUMNS[c - 1])).collect();
-        plot(ui, "ms", "milliseconds per stage", &stages, &self.history);
-        plot(ui, "moved", "VPLs moved per frame", &[(7, "")], &self.history);
-        plot(ui, "change", "frame-to-frame change Σ|ΔL|/ΣL", &[(8, "")], &self.history);
+        plot(ui, "ms", "milliseconds per stage", &stages, &self.picture.history);
+        plot(ui, "moved", "VPLs moved per frame", &[(7, "")], &self.picture.history);
+        plot(ui, "change", "frame-to-frame change Σ|ΔL|/ΣL", &[(8, "")], &self.picture.history);
         ui.separator();
         ui.horizontal(|ui| {
             if ui.button("screenshot (PNG, EXR)").clicked() {
-                self.shots += 1;
-                self.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.shots)));
+                self.session.shots += 1;
+                self.session.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.session.shots)));
             }
-            if self.recording.is_none() {
+            if self.rec.recording.is_none() {
                 if ui.button("record path").clicked() {
                     self.record_start();
                 }
             } else if ui.button("stop, write scene file").clicked() {
-                self.recordings += 1;
-                let path = PathBuf::from(format!("vpl-view-{}-path-{}.toml", self.scene_name, self.recordings));
+                self.rec.recordings += 1;
+                let path = PathBuf::from(format!("vpl-view-{}-path-{}.toml", self.scene_name, self.rec.recordings));
                 if let Err(e) = self.record_stop(&path) {
                     self.error_line = Some(e.to_string());
                 }
             }
         });
-        if let Some((start, r)) = &self.recording {
+        if let Some((start, r)) = &self.rec.recording {
             ui.label(egui::RichText::new(format!("recording: {:.1} s, {} keys", start.elapsed().as_secs_f32(), r.len())).small());
         }
         ui.label(
@@ -233,15 +233,15 @@ impl State {
 
     pub(super) fn view(&mut self, ui: &mut egui::Ui) {
         let rect = ui.available_rect_before_wrap();
-        if self.view_rect.is_none_or(|r| (r.size() - rect.size()).length() > 0.5) {
-            let first = self.view_rect.is_none();
-            self.view_rect = Some(rect);
+        if self.picture.view_rect.is_none_or(|r| (r.size() - rect.size()).length() > 0.5) {
+            let first = self.picture.view_rect.is_none();
+            self.picture.view_rect = Some(rect);
             if !first {
                 self.changed(true);
             }
         }
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-        match self.view_texture {
+        match self.picture.view_texture {
             Some(t) => {
                 ui.painter().image(t, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
             }
@@ -255,7 +255,7 @@ impl State {
                 );
             }
         }
-        let d = response.drag_delta() * self.pixels_per_point;
+        let d = response.drag_delta() * self.picture.pixels_per_point;
         if d != egui::Vec2::ZERO {
             let ctrl = ui.input(|i| i.modifiers.command);
             if response.dragged_by(egui::PointerButton::Primary) && ctrl {
@@ -271,17 +271,17 @@ impl State {
         // A click (no drag) picks the VPL nearest to it.
         if response.clicked()
             && let Some(pos) = response.interact_pointer_pos()
-            && let Some((cw, ch)) = self.composite.as_ref().map(|c| (c.width as f32, c.height as f32))
+            && let Some((cw, ch)) = self.picture.composite.as_ref().map(|c| (c.width as f32, c.height as f32))
         {
             let x = (pos.x - rect.min.x) / rect.width().max(1.0) * cw;
             let y = (pos.y - rect.min.y) / rect.height().max(1.0) * ch;
-            let radius = PICK_RADIUS * cw / (rect.width() * self.pixels_per_point).max(1.0);
+            let radius = PICK_RADIUS * cw / (rect.width() * self.picture.pixels_per_point).max(1.0);
             self.pick_at(x, y, radius);
         }
         // The picked VPL's shadow map, in the view's lower right corner.
-        self.map_rect = None;
-        if let Some((_, m)) = &self.map {
-            let texture = self.map_texture.get_or_insert_with(|| {
+        self.inspect.map_rect = None;
+        if let Some((_, m)) = &self.inspect.map {
+            let texture = self.inspect.map_texture.get_or_insert_with(|| {
                 let image = egui::ColorImage::from_rgba_unmultiplied([m.res as usize, m.res as usize], &m.rgba);
                 ui.ctx().load_texture("vpl-view shadow map", image, egui::TextureOptions::NEAREST)
             });
@@ -293,11 +293,11 @@ impl State {
             ui.painter().text(
                 inset.left_top() - egui::vec2(0.0, 2.0),
                 egui::Align2::LEFT_BOTTOM,
-                format!("shadow map of VPL {} ({}², paraboloid)", self.picked.map_or(0, |p| p.1), m.res),
+                format!("shadow map of VPL {} ({}², paraboloid)", self.inspect.picked.map_or(0, |p| p.1), m.res),
                 egui::FontId::proportional(12.0),
                 egui::Color32::from_rgb(255, 0, 255),
             );
-            self.map_rect = Some(inset);
+            self.inspect.map_rect = Some(inset);
         }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);

@@ -2,10 +2,16 @@
 
 use super::*;
 
+/// A path being recorded, and how many were written.
+pub(super) struct Recordings {
+    pub(super) recording: Option<(Instant, Recorder)>,
+    pub(super) recordings: u32,
+}
+
 impl State {
     /// The camera and the `[[lights]]` entries now.
     pub(super) fn pose(&mut self) -> Pose {
-        let lights = match &self.manual_lights {
+        let lights = match &self.anim.manual_lights {
             Some(l) => l.clone(),
             None => self.scene().map_or_else(|_| self.setup.scene.extra_lights(), |s| s.extra_lights()),
         };
@@ -25,14 +31,14 @@ impl State {
         let fps = self.setup.sequence.as_ref().map_or(30.0, |s| s.fps);
         let mut r = Recorder::new(fps);
         r.push(0.0, self.pose());
-        self.recording = Some((Instant::now(), r));
+        self.rec.recording = Some((Instant::now(), r));
         self.status_line = Some("recording the camera and the lights".into());
     }
 
     /// Ends the recording and writes the scene file with it as its
     /// animation; model paths are made relative to the file's folder.
     pub(super) fn record_stop(&mut self, path: &Path) -> Result<PathBuf, ViewerError> {
-        let Some((start, mut r)) = self.recording.take() else {
+        let Some((start, mut r)) = self.rec.recording.take() else {
             return Err(ViewerError::Invalid("record stop: nothing is being recorded".into()));
         };
         let t = start.elapsed().as_secs_f32();

@@ -3,19 +3,29 @@
 
 use super::*;
 
+/// The scripted session: its steps, the frames it waits for, its screenshots, and whether it ends.
+pub(super) struct Session {
+    pub(super) scripted: bool,
+    pub(super) script: VecDeque<Step>,
+    pub(super) waiting: u32,
+    pub(super) pending_shot: Option<PathBuf>,
+    pub(super) shots: u32,
+    pub(super) quit: bool,
+}
+
 impl State {
     /// Runs the script's steps up to the next wait (after the first frame).
     pub(super) fn advance_script(&mut self) {
-        if !self.scripted || self.frames_shown == 0 || self.pending_shot.is_some() || self.quit {
+        if !self.session.scripted || self.frames_shown == 0 || self.session.pending_shot.is_some() || self.session.quit {
             return;
         }
-        while self.waiting == 0 {
-            let Some(step) = self.script.pop_front() else {
-                self.quit = true;
+        while self.session.waiting == 0 {
+            let Some(step) = self.session.script.pop_front() else {
+                self.session.quit = true;
                 return;
             };
             match step {
-                Step::Frames(n) => self.waiting = n,
+                Step::Frames(n) => self.session.waiting = n,
                 Step::Sampler(name) => {
                     if !self.check_sampler(&name) {
                         return;
@@ -37,11 +47,11 @@ impl State {
                 }
                 Step::Overlay(o) => {
                     self.overlay = o;
-                    self.recompose = true;
+                    self.picture.recompose = true;
                 }
                 Step::Show(c) => {
                     self.channel = c;
-                    self.recompose = true;
+                    self.picture.recompose = true;
                 }
                 Step::Mode(m) => {
                     self.mode = m;
@@ -57,14 +67,14 @@ impl State {
                 }
                 Step::Reference(on) => self.set_reference(on),
                 Step::Pick(None) => {
-                    self.picked = None;
+                    self.inspect.picked = None;
                     self.refresh_map();
                 }
                 Step::Pick(Some((fx, fy))) => {
-                    let Some(left) = self.last.first() else { continue };
+                    let Some(left) = self.picture.last.first() else { continue };
                     let (w, h) = (left.out.image.width as f32, left.out.image.height as f32);
                     self.pick_at(fx * w, fy * h, f32::INFINITY);
-                    if self.picked.is_none() {
+                    if self.inspect.picked.is_none() {
                         self.fail(ViewerError::Render(format!("pick {fx} {fy}: the view shows no VPL")));
                         return;
                     }
@@ -77,12 +87,12 @@ impl State {
                     }
                 }
                 Step::Screenshot(path) => {
-                    self.pending_shot = Some(path);
+                    self.session.pending_shot = Some(path);
                     return;
                 }
                 Step::Quit => {
-                    self.script.clear();
-                    self.quit = true;
+                    self.session.script.clear();
+                    self.session.quit = true;
                     return;
                 }
             }
@@ -113,7 +123,7 @@ impl State {
         let png = with(".png");
         vpl_scene_io::write_png_rgb8(&png, w, h, &rgb)?;
         let exr = with(".exr");
-        match &self.composite {
+        match &self.picture.composite {
             Some(c) if c.hdr.on_host() => c.hdr.write_exr(&exr)?,
             // Composed on the device: the values come from the frames read back.
             Some(_) => {
@@ -126,11 +136,12 @@ impl State {
             }
             None => {}
         }
-        let ppp = self.pixels_per_point;
-        let view = self.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
-        let split = self.composite.as_ref().and_then(|c| c.split_x.map(|s| view[0] + (s as f32 / c.width as f32) * (view[2] - view[0])));
-        let sides: Vec<String> = self.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
-        let res = self.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
+        let ppp = self.picture.pixels_per_point;
+        let view = self.picture.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
+        let split =
+            self.picture.composite.as_ref().and_then(|c| c.split_x.map(|s| view[0] + (s as f32 / c.width as f32) * (view[2] - view[0])));
+        let sides: Vec<String> = self.picture.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
+        let res = self.picture.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
         let json = format!(
             "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {},\n  \"reference_passes\": {},\n  \"picked\": {},\n  \"shadow_map\": {}\n}}\n",
             view[0],
@@ -144,9 +155,9 @@ impl State {
             self.channel.name(),
             self.overlay.name(),
             self.frames_shown,
-            self.reference.as_ref().map_or(0, |r| r.passes),
-            self.picked.map_or("null".to_string(), |(k, slot)| format!("[{k}, {slot}]")),
-            self.map_rect.map_or("null".to_string(), |r| format!(
+            self.inspect.reference.as_ref().map_or(0, |r| r.passes),
+            self.inspect.picked.map_or("null".to_string(), |(k, slot)| format!("[{k}, {slot}]")),
+            self.inspect.map_rect.map_or("null".to_string(), |r| format!(
                 "[{:.1}, {:.1}, {:.1}, {:.1}]",
                 r.min.x * ppp,
                 r.min.y * ppp,

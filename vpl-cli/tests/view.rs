@@ -352,7 +352,7 @@ fn assert_no_display_in_one_line(display: Option<&str>) {
         c.env_remove(var);
     }
     if let Some(d) = display {
-        // The window system is reached only after the renderer is chosen.
+        // On the CPU: no GPU library loads beside the failed connection.
         c.args(["--backend", "cpu"]).env("DISPLAY", d);
     }
     let out = c.output().unwrap();

@@ -20,7 +20,8 @@
 //! - `own pooled`: `own` with each probe's area from its nearest probe
 //!   among those of every iteration held (on its side of the surface, or
 //!   on its own smooth surface), scaled to the same total: areas measured
-//!   at a radius about √T times shorter.
+//!   at a radius about √(T/s) times shorter (T iterations held, s hits a
+//!   probe).
 //!
 //! and the median time of SMC's step over the last 32 frames.
 //!
@@ -117,8 +118,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let means = areas.iter().enumerate().map(|(k, &(i, p, n, a))| vpl(k, p, n, light[i] / area[i] * a)).collect();
     let (own, means) = (shade(&set_of(own)), shade(&set_of(means)));
     // The same probes and radiances with areas from each probe's nearest
-    // neighbour among the probes of every iteration held (a radius √T
-    // times shorter than one iteration's), on its side of the surface
+    // neighbour among the probes of every iteration held (a radius about
+    // √(T/s) times shorter than one iteration's hits give, s hits a probe), on its side of the surface
     // (normals within 120°) or on its own smooth surface (within 60°),
     // scaled to the cells' total area: where the areas' error comes from
     // the radius (edges, corners, density changes), it shrinks here.

@@ -47,11 +47,6 @@ impl SceneSetup {
     /// lights) is in the model's frame: `geometry.up = "z"` turns all of it
     /// to the toolkit's +Y up, and `geometry.scale` scales all positions.
     pub fn from_description(file: SceneFile, base: &Path, models: &dyn ModelLoader) -> Result<SceneSetup> {
-        Self::build(file, base, models)
-    }
-
-    /// Builds from `file`, reading its model through `models`.
-    fn build(file: SceneFile, base: &Path, models: &dyn ModelLoader) -> Result<SceneSetup> {
         let mut warnings = Vec::new();
         let frame = ModelFrame::of(&file.geometry);
         let (Model { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, two_sided: two_sided_default }, defaults) =

@@ -124,6 +124,40 @@ mod tests {
         assert!(crate::from_file(f, Path::new("")).unwrap_err().to_string().contains("light 3"));
     }
 
+    /// An animation recorded in the toolkit's frame is written in the
+    /// model's, and reads back from the TOML text as the same animation.
+    #[test]
+    fn a_world_sequence_survives_the_model_frame_and_the_file() {
+        use vpl_core::scene_file::{CameraKeySpec, LightKeySpec, SequenceSpec};
+        // atrium: one point light, the [[lights]] entry the key moves.
+        let mut file = SceneSetup::builtin("atrium").unwrap().description;
+        file.geometry.up = "z".into();
+        file.geometry.scale = 2.0;
+        file.sequence = None;
+        let setup = crate::from_file(file, Path::new("")).unwrap();
+        let o = Vec3::new(0.1, 2.0, -3.0);
+        let g = Vec3::new(0.0, 1.0, 0.5);
+        let d = Vec3::new(0.0, -1.0, 0.2).normalize();
+        let key = |t: f32, x: f32| CameraKeySpec { t, origin: (o + Vec3::X * x).into(), target: g.into() };
+        let world = SequenceSpec {
+            fps: 10.0,
+            duration: 1.0,
+            camera: vec![key(0.0, 0.0), key(1.0, 1.0)],
+            lights: vec![LightKeySpec { light: 0, t: 0.0, position: Some(g.into()), direction: Some(d.into()) }],
+        };
+        let setup = setup.with_world_sequence(world).unwrap();
+        let check = |s: &SceneSetup| {
+            let seq = s.sequence.as_ref().unwrap();
+            let (so, sg) = seq.camera_at(1.0).unwrap();
+            assert!((so - (o + Vec3::X)).length() < 1e-5 && (sg - g).length() < 1e-5, "{so} {sg}");
+            let (p, dir) = seq.light_at(0, 0.0);
+            assert!((p.unwrap() - g).length() < 1e-5 && (dir.unwrap() - d).length() < 1e-5);
+        };
+        check(&setup);
+        let again = parse(&setup_toml(&setup), Path::new("x.toml")).unwrap();
+        check(&crate::from_file(again, Path::new("")).unwrap());
+    }
+
     #[test]
     fn every_builtin_exports_and_loads_again() {
         for name in vpl_core::builtin::NAMES {

@@ -117,5 +117,7 @@ pub use setup::{Model, ModelLoader, NoModelFiles, SceneSetup};
 pub use shadow_map::{MapView, ShadowMapSource};
 pub use stats::{Stat, Stats};
 pub use surface::{Hit, SurfacePoint};
-pub use traits::{CpuRays, IndirectShader, LightPathGenerator, RadiosityEstimator, RayCaster, VisibilityUpdate, VplSampler, VplVisibility};
+pub use traits::{
+    CpuRays, DeviceKey, IndirectShader, LightPathGenerator, RadiosityEstimator, RayCaster, VisibilityUpdate, VplSampler, VplVisibility,
+};
 pub use vpl::{Vpl, VplSet};

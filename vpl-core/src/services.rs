@@ -3,8 +3,9 @@
 //! built (the registry passes them), so the sampler trait carries no setter
 //! that only one sampler needs.
 
+use crate::budget::Budget;
+use crate::params::Params;
 use crate::traits::{CpuRays, RadiosityEstimator, RayCaster, VplSampler};
-use std::any::Any;
 use std::sync::Arc;
 
 /// A radiosity estimator shared between threads.
@@ -27,14 +28,15 @@ where
 }
 
 /// Samplers a backend runs wholly on its device: twins of host samplers,
-/// offered by the host sampler's name and its settings (the host sampler's
-/// own configuration type, e.g. `vpl_smc::SmcConfig`), so a registry entry
-/// asks before it builds the host one.
+/// offered by the host sampler's registry name, budget and parameters
+/// (which the twin reads as that entry does), so a registry entry asks
+/// before it builds the host one.
 pub trait DeviceSamplers: Send + Sync {
-    /// The device's twin of sampler `name` with `settings`; `None` when the
-    /// backend has none for them (the host sampler runs), an error when it
-    /// has one that failed to start.
-    fn twin(&self, name: &str, settings: &dyn Any) -> Option<Result<Box<dyn VplSampler>, DeviceError>>;
+    /// The device's twin of the sampler registered as `name`, for `budget`
+    /// with the parameters `params`; `None` when the backend has none for
+    /// them (the host sampler runs, and reports any parameter error), an
+    /// error when it has one that failed to start.
+    fn twin(&self, name: &str, budget: &Budget, params: &Params) -> Option<Result<Box<dyn VplSampler>, DeviceError>>;
 }
 
 /// Why a device's sampler failed to start.

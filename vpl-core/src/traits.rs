@@ -142,6 +142,21 @@ pub struct VisibilityUpdate {
     pub memory_bytes: usize,
 }
 
+/// Names the structures one visibility keeps on a device
+/// ([`VplVisibility::device_key`]): unique among all keys made in the
+/// process, so a shader on the device finds the structures of the
+/// visibility it is handed and of no other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DeviceKey(u64);
+
+impl DeviceKey {
+    /// A key no other call has returned.
+    pub fn unique() -> DeviceKey {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        DeviceKey(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+}
+
 /// Visibility V(x, y) between receivers and the VPLs of a set, by slot.
 pub trait VplVisibility: Send + Sync {
     /// Short name (`raytrace`, `shadowmap`).
@@ -164,9 +179,13 @@ pub trait VplVisibility: Send + Sync {
     }
     /// Memory held, in bytes.
     fn memory_bytes(&self) -> usize;
-    /// The concrete type, for shaders with a fused fast path for a known
-    /// visibility (they must give the same result as [`VplVisibility::attenuate`]).
-    fn as_any(&self) -> &dyn std::any::Any;
+    /// The key under which this visibility's structures on a device are
+    /// found by shaders on that device, which then read them in place
+    /// (with the same result as [`VplVisibility::attenuate`]). `None` (the
+    /// default) for a visibility on the host.
+    fn device_key(&self) -> Option<DeviceKey> {
+        None
+    }
     /// The shadow maps this visibility answers from, where every answer is
     /// its slot's map's (no map: not visible): shaders may read them
     /// directly, with the same result as [`VplVisibility::attenuate`].

@@ -8,8 +8,8 @@
 use crate::{Frames, Gpu, GpuError, GpuInterleavedShader, GpuRadiosity, GpuRayTraced, GpuRays, GpuShadowMaps, GpuSmcSampler};
 use std::sync::Arc;
 use vpl_core::{
-    Budget, Camera, DeviceError, DeviceSamplers, GBuffer, GeometryClamp, IndirectShader, Scene, Services, SharedEstimator, VplSampler,
-    VplVisibility,
+    Budget, Camera, DeviceError, DeviceSamplers, GBuffer, GeometryClamp, IndirectShader, Params, Scene, Services, SharedEstimator,
+    VplSampler, VplVisibility,
 };
 use vpl_pathtrace::PathRadiosity;
 use vpl_render::{Backend, RenderError, ShadingSpec, VisibilitySpec};
@@ -76,13 +76,14 @@ impl GpuBackend {
 struct DeviceTwins(Gpu);
 
 impl DeviceSamplers for DeviceTwins {
-    fn twin(&self, name: &str, settings: &dyn std::any::Any) -> Option<Result<Box<dyn VplSampler>, DeviceError>> {
-        let config = settings.downcast_ref::<SmcConfig>()?;
-        let runs = name.starts_with("smc")
-            && config.flux == FluxEstimator::Knn
-            && config.placement == Placement::Site
-            && config.k() <= crate::MAX_K;
-        runs.then(|| GpuSmcSampler::new(self.0.clone(), *config).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(DeviceError::from))
+    fn twin(&self, name: &str, budget: &Budget, params: &Params) -> Option<Result<Box<dyn VplSampler>, DeviceError>> {
+        let config = match name {
+            "smc" => SmcConfig::from_params(budget, params).ok()?,
+            "smc-knn" => SmcConfig::paper_from_params(budget, params).ok()?,
+            _ => return None,
+        };
+        let runs = config.flux == FluxEstimator::Knn && config.placement == Placement::Site && config.k() <= crate::MAX_K;
+        runs.then(|| GpuSmcSampler::new(self.0.clone(), config).map(|s| Box::new(s) as Box<dyn VplSampler>).map_err(DeviceError::from))
     }
 }
 

@@ -27,6 +27,7 @@ struct Inner {
     lights: Mutex<Option<Arc<crate::radiosity::LightBuffers>>>,
     resident: Mutex<Option<Resident>>,
     gbuffer_ms: Mutex<(f64, f64)>,
+    visibilities: crate::visibility::Visibilities,
 }
 
 /// The device G-buffer of the last frame, and what the host holds of it:
@@ -82,7 +83,12 @@ impl Gpu {
             lights: Mutex::new(None),
             resident: Mutex::new(None),
             gbuffer_ms: Mutex::new((0.0, 0.0)),
+            visibilities: Default::default(),
         }))
+    }
+
+    pub(crate) fn visibilities(&self) -> &crate::visibility::Visibilities {
+        &self.0.visibilities
     }
 
     /// Whether `other` is a handle to the same device.

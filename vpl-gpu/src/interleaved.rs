@@ -5,10 +5,8 @@ use crate::context::GpuError;
 use crate::device::Gpu;
 use crate::frame::{DeviceFrame, Frames};
 use crate::kernel::{Binding, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform};
-use crate::raytraced::GpuRayTraced;
-use crate::scene::{BVH_WGSL, GpuScene, scene_layout};
-use crate::shadow_maps::GpuShadowMaps;
-use std::sync::Arc;
+use crate::scene::{BVH_WGSL, scene_layout};
+use crate::visibility::DeviceVisibility;
 use std::time::Instant;
 use vpl_core::glam::{Vec3, Vec4};
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
@@ -69,8 +67,10 @@ struct Kernels {
 /// and by the rare receiver whose shadow-map test lands on the other side of
 /// its threshold.
 ///
-/// Visibility must be a [`GpuShadowMaps`] or a [`GpuRayTraced`] on the same
-/// [`Gpu`]; with any other, `shade` runs the wrapped CPU shader instead.
+/// Visibility must keep its structures on the same [`Gpu`] (a
+/// [`crate::GpuShadowMaps`] or a [`crate::GpuRayTraced`] made on a clone of
+/// it, found by its [`VplVisibility::device_key`]); with any other, `shade`
+/// runs the wrapped CPU shader instead.
 /// [`GpuInterleavedShader::exhaustive`] makes the exhaustive shader's twin.
 pub struct GpuInterleavedShader {
     gpu: Gpu,
@@ -95,23 +95,6 @@ pub struct GpuInterleavedShader {
     finished: Option<DeviceFrame>,
     /// Where images left on the device are published, with their G-buffer.
     publish: Option<Frames>,
-}
-
-/// The device parts of the visibility a gather reads: shadow maps (mode 0)
-/// or shadow rays against the device scene (mode 1).
-struct DeviceVisibility<'a> {
-    /// 0: shadow maps, 1: rays.
-    mode: u32,
-    /// The scene on the device.
-    scene: Arc<GpuScene>,
-    /// Ray offset.
-    eps: f32,
-    /// Shadow map resolution (1 for rays).
-    res: u32,
-    /// Shadow map bias scale (0 for rays).
-    bias: f32,
-    /// The maps, for mode 0.
-    maps: Option<&'a GpuShadowMaps>,
 }
 
 impl GpuInterleavedShader {
@@ -201,36 +184,16 @@ impl GpuInterleavedShader {
 
     /// Whether `vis` is a visibility on this shader's device.
     fn device_visibility(&self, vis: &dyn VplVisibility) -> bool {
-        let any = vis.as_any();
-        any.downcast_ref::<GpuShadowMaps>().is_some_and(|m| m.gpu().same(&self.gpu))
-            || any.downcast_ref::<GpuRayTraced>().is_some_and(|r| r.gpu().same(&self.gpu))
+        vis.device_key().is_some_and(|k| self.gpu.holds_visibility(k))
     }
 
     fn shade_on_device(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Option<Result<Image, GpuError>> {
-        if !self.device_visibility(vis) {
-            return None;
-        }
-        let any = vis.as_any();
-        let on_device = if let Some(sm) = any.downcast_ref::<GpuShadowMaps>() {
-            DeviceVisibility {
-                mode: 0,
-                scene: sm.device_scene()?.clone(),
-                eps: sm.epsilon(),
-                res: sm.resolution(),
-                bias: sm.bias_scale,
-                maps: Some(sm),
-            }
-        } else if let Some(rt) = any.downcast_ref::<GpuRayTraced>() {
-            let (scene, eps) = rt.device_scene()?;
-            DeviceVisibility { mode: 1, scene: scene.clone(), eps: *eps, res: 1, bias: 0.0, maps: None }
-        } else {
-            return None;
-        };
+        let on_device = self.gpu.visibility(vis.device_key()?)?;
         Some(self.run(gbuf, vpls, &on_device))
     }
 
     fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &DeviceVisibility) -> Result<Image, GpuError> {
-        let &DeviceVisibility { mode, ref scene, eps, res, bias, maps: sm } = vis;
+        let DeviceVisibility { mode, ref scene, eps, res, bias, ref maps } = *vis;
         let t0 = Instant::now();
         self.subset_buffers(vpls.len());
         self.kernels();
@@ -250,8 +213,8 @@ impl GpuInterleavedShader {
             .collect();
         let b_vpls = storage_init(ctx, "vpls", &rows);
         let dummy;
-        let (atlas, headers) = match sm.and_then(|s| s.device_buffers()) {
-            Some(b) => b,
+        let (atlas, headers) = match maps {
+            Some((a, h)) => (a, h),
             None => {
                 dummy = storage(ctx, "no maps", 16)?;
                 (&dummy, &dummy)

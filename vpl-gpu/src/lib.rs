@@ -111,6 +111,7 @@ mod raytraced;
 mod scene;
 mod shadow_maps;
 mod smc;
+mod visibility;
 
 pub use backend::{GpuBackend, backend, register};
 pub use context::{GpuContext, GpuError, Traffic};

@@ -2,10 +2,9 @@
 //! [`vpl_visibility::RayTraced`].
 
 use crate::device::Gpu;
-use crate::scene::GpuScene;
-use std::sync::Arc;
+use crate::visibility::DeviceVisibility;
 use vpl_core::glam::Vec3;
-use vpl_core::{Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
+use vpl_core::{DeviceKey, Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
 use vpl_visibility::RayTraced;
 
 /// One shadow ray per (receiver, VPL) pair, traced by
@@ -15,22 +14,14 @@ use vpl_visibility::RayTraced;
 pub struct GpuRayTraced {
     gpu: Gpu,
     host: RayTraced,
-    scene: Option<(Arc<GpuScene>, f32)>,
+    /// Where shaders on the same device find the device scene.
+    key: DeviceKey,
 }
 
 impl GpuRayTraced {
     /// Shadow rays on `gpu`.
     pub fn new(gpu: Gpu) -> GpuRayTraced {
-        GpuRayTraced { gpu, host: RayTraced::default(), scene: None }
-    }
-
-    /// The device scene and its ray offset ε, after the first update.
-    pub(crate) fn gpu(&self) -> &Gpu {
-        &self.gpu
-    }
-
-    pub(crate) fn device_scene(&self) -> Option<&(Arc<GpuScene>, f32)> {
-        self.scene.as_ref()
+        GpuRayTraced { key: gpu.register_visibility(), gpu, host: RayTraced::default() }
     }
 }
 
@@ -43,7 +34,8 @@ impl VplVisibility for GpuRayTraced {
     /// When the device fails to take the scene.
     fn update(&mut self, scene: &Scene, vpls: &VplSet) -> VisibilityUpdate {
         let gs = self.gpu.scene(scene).unwrap_or_else(|e| panic!("GPU scene upload: {e}"));
-        self.scene = Some((gs, scene.epsilon()));
+        let eps = scene.epsilon();
+        self.gpu.publish_visibility(self.key, DeviceVisibility { mode: 1, scene: gs, eps, res: 1, bias: 0.0, maps: None });
         self.host.update(scene, vpls)
     }
 
@@ -59,7 +51,13 @@ impl VplVisibility for GpuRayTraced {
         self.host.memory_bytes()
     }
 
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
+    fn device_key(&self) -> Option<DeviceKey> {
+        Some(self.key)
+    }
+}
+
+impl Drop for GpuRayTraced {
+    fn drop(&mut self) {
+        self.gpu.forget_visibility(self.key);
     }
 }

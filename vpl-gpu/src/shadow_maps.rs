@@ -6,9 +6,10 @@ use crate::device::Gpu;
 use crate::kernel::{Binding, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::scene::GpuScene;
 use crate::scene::{BVH_WGSL, scene_layout};
+use crate::visibility::DeviceVisibility;
 use std::sync::{Arc, Mutex};
 use vpl_core::glam::{Vec3, Vec4};
-use vpl_core::{LocalFrame, Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
+use vpl_core::{DeviceKey, LocalFrame, Receivers, Scene, VisibilityUpdate, VplSet, VplVisibility};
 use vpl_visibility::{MAX_RESOLUTION, MapView, ShadowMapError};
 
 #[repr(C)]
@@ -52,13 +53,15 @@ pub struct GpuShadowMaps {
     res: u32,
     eps: f32,
     /// Scale k of the slope-dependent depth bias (default 1), as the CPU twin's.
-    pub bias_scale: f32,
+    bias_scale: f32,
     headers: Vec<Option<Header>>,
     /// (atlas, slots it holds, header buffer).
     device: Option<(wgpu::Buffer, usize, wgpu::Buffer)>,
     host: Mutex<Option<Vec<f32>>>,
     kernel: Option<(wgpu::BindGroupLayout, wgpu::ComputePipeline)>,
     scene: Option<Arc<GpuScene>>,
+    /// Where shaders on the same device find the atlas.
+    key: DeviceKey,
 }
 
 impl GpuShadowMaps {
@@ -68,7 +71,6 @@ impl GpuShadowMaps {
             return Err(ShadowMapError::Resolution(res));
         }
         Ok(GpuShadowMaps {
-            gpu,
             res,
             eps: 0.0,
             bias_scale: 1.0,
@@ -77,7 +79,36 @@ impl GpuShadowMaps {
             host: Mutex::new(None),
             kernel: None,
             scene: None,
+            key: gpu.register_visibility(),
+            gpu,
         })
+    }
+
+    /// Scale k of the slope-dependent depth bias (default 1).
+    pub fn bias_scale(&self) -> f32 {
+        self.bias_scale
+    }
+
+    /// Sets the scale k of the slope-dependent depth bias, as the CPU
+    /// twin's `bias_scale`; shaders read it from the next shade on.
+    pub fn set_bias_scale(&mut self, k: f32) {
+        self.bias_scale = k;
+        self.publish();
+    }
+
+    /// Leaves the atlas, its headers and the settings where shaders on
+    /// the same device find them by this visibility's key.
+    fn publish(&self) {
+        let (Some(scene), Some((atlas, _, headers))) = (&self.scene, &self.device) else { return };
+        let state = DeviceVisibility {
+            mode: 0,
+            scene: scene.clone(),
+            eps: self.eps,
+            res: self.res,
+            bias: self.bias_scale,
+            maps: Some((atlas.clone(), headers.clone())),
+        };
+        self.gpu.publish_visibility(self.key, state);
     }
 
     /// Texels per side.
@@ -138,25 +169,6 @@ impl GpuShadowMaps {
         finish(ctx, enc)
     }
 
-    /// The device atlas and headers, for the shader: (atlas, headers).
-    pub(crate) fn device_buffers(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
-        self.device.as_ref().map(|(a, _, h)| (a, h))
-    }
-
-    /// The device scene of the last update.
-    pub(crate) fn gpu(&self) -> &Gpu {
-        &self.gpu
-    }
-
-    pub(crate) fn device_scene(&self) -> Option<&Arc<GpuScene>> {
-        self.scene.as_ref()
-    }
-
-    /// The scene's ray offset of the last update.
-    pub(crate) fn epsilon(&self) -> f32 {
-        self.eps
-    }
-
     /// The depths of `slot`'s map, row-major, read back from the device
     /// (`None` for an empty slot); misses read 3·10³⁸.
     pub fn depths(&self, slot: usize) -> Option<Vec<f32>> {
@@ -212,6 +224,7 @@ impl VplVisibility for GpuShadowMaps {
             panic!("GPU shadow maps: {e}");
         }
         *self.host.lock().expect("host copy lock") = None;
+        self.publish();
         VisibilityUpdate { rebuilt: jobs.len(), memory_bytes: self.memory_bytes() }
     }
 
@@ -246,7 +259,13 @@ impl VplVisibility for GpuShadowMaps {
         self.device.as_ref().map_or(0, |(a, _, h)| (a.size() + h.size()) as usize)
     }
 
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
+    fn device_key(&self) -> Option<DeviceKey> {
+        Some(self.key)
+    }
+}
+
+impl Drop for GpuShadowMaps {
+    fn drop(&mut self) {
+        self.gpu.forget_visibility(self.key);
     }
 }

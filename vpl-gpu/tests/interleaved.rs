@@ -73,3 +73,50 @@ fn gpu_interleaved_shading_matches_the_cpu_shader() {
     let b = GpuInterleavedShader::exhaustive(gpu.clone(), clamp).shade(&gbuf, &set, &gsm);
     compare("exhaustive, shadow maps", &a, &b);
 }
+
+/// A shader finds a visibility's device structures by its
+/// [`VplVisibility::device_key`], on its own device only: maps on another
+/// device, or a visibility on the host, make it shade on the host. A depth
+/// bias set after the maps' update reaches the device gather (checked
+/// against the CPU maps with the same bias, which must differ from the
+/// default's image for the check to tell).
+#[test]
+fn the_shader_reads_only_visibilities_of_its_own_device() {
+    let Some(ctx) = context() else { return };
+    let Some(other_ctx) = context() else { return };
+    let (gpu, other) = (Gpu::from_context(ctx), Gpu::from_context(other_ctx));
+    let setup = SceneSetup::builtin("cornell").unwrap();
+    let scene = &setup.scene;
+    let camera = setup.camera.with_resolution((48, 48)).unwrap();
+    let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 64, ..Default::default() }).unwrap().sample(scene, 5).clone();
+    let clamp = Some(GeometryClamp::new(50.0));
+    let gbuf = gpu.render_gbuffer(scene, &camera).unwrap();
+    let mut shader = GpuInterleavedShader::exhaustive(gpu.clone(), clamp);
+
+    let mut mine = GpuShadowMaps::new(gpu.clone(), 16).unwrap();
+    let mut theirs = GpuShadowMaps::new(other.clone(), 16).unwrap();
+    mine.update(scene, &set);
+    theirs.update(scene, &set);
+    let mut host = RayTraced::default();
+    host.update(scene, &set);
+    assert!(mine.device_key().is_some() && host.device_key().is_none());
+    assert_ne!(mine.device_key(), theirs.device_key(), "every visibility has its own key");
+    assert!(shader.on_device(&mine));
+    assert!(!shader.on_device(&theirs), "maps on another device");
+    assert!(!shader.on_device(&host), "a visibility on the host");
+    // The other device's maps shade on the host, through the same answers.
+    let host_maps = shader.shade(&gbuf, &set, &theirs);
+    let device_maps = shader.shade(&gbuf, &set, &mine);
+    compare("another device's maps, on the host", &device_maps, &host_maps);
+
+    // Coarse 16² maps show the bias: k = 4 against the default k = 1.
+    let mut cpu = ShadowMaps::new(16).unwrap();
+    cpu.bias_scale = 4.0;
+    cpu.update(scene, &set);
+    mine.set_bias_scale(4.0);
+    let biased = shader.shade(&gbuf, &set, &mine);
+    compare("bias 4, set after the update", &ExhaustiveShader { clamp }.shade(&gbuf, &set, &cpu), &biased);
+    let changed =
+        biased.data.iter().zip(&device_maps.data).filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * b.max_element()).count();
+    assert!(changed > 0, "the bias must change the image for this check to tell");
+}

@@ -166,3 +166,30 @@ fn the_devices_smc_times_its_stages_on_the_device() {
     assert!(t.total_ms > 0.0 && t.total_ms <= wall, "{} ms on the device in a frame of {wall} ms", t.total_ms);
     assert!(VplSampler::stats(&dev).get("knn_ms").is_some());
 }
+
+/// The backend offers its device twin by the registry entry's name and
+/// parameters: `smc-knn` (the paper's flux at the sites) runs on the
+/// device, as does `smc` told to use it; the toolkit's default `smc` (the
+/// Voronoi flux), `smc-knn` told to place at centroids, other samplers and
+/// parameters that do not parse get none (the host entry runs, and reports
+/// the parameter's error).
+#[test]
+fn the_backend_offers_its_smc_for_the_paper_settings_only() {
+    let Some(ctx) = context() else { return };
+    let backend = vpl_gpu::GpuBackend::new(Gpu::from_context(ctx));
+    let services = vpl_render::Backend::services(&backend);
+    let twins = services.samplers.clone().expect("the GPU backend runs samplers on its device");
+    let budget = vpl_core::Budget::new(64, 5);
+    let offered = |name: &str, params: &[&str]| {
+        let p = vpl_core::Params::parse(params.iter().copied()).unwrap();
+        twins.twin(name, &budget, &p).map(|r| r.is_ok())
+    };
+    assert_eq!(offered("smc-knn", &[]), Some(true));
+    assert_eq!(offered("smc", &["flux=knn"]), Some(true));
+    assert_eq!(offered("smc", &[]), None);
+    assert_eq!(offered("smc-knn", &["placement=centroid"]), None);
+    assert_eq!(offered("smc-knn", &["m-max=many"]), None);
+    assert_eq!(offered("ir", &[]), None);
+    let err = vpl_sampling::Registry::builtin().build("smc-knn", budget, &services, &vpl_core::Params::parse(["m-max=many"]).unwrap());
+    assert!(err.is_err_and(|e| e.to_string().contains("m-max")));
+}

@@ -6,7 +6,7 @@ use vpl_core::{Budget, ParamError, Params, VplSampler};
 use vpl_ir::{InstantRadiosity, IrConfig};
 use vpl_mir::{MirConfig, MirResampleConfig, MirResampleSampler, MirSampler};
 use vpl_rr::{LightPaths, RrConfig, RrSampler, SamplerCandidates};
-use vpl_smc::{FluxEstimator, Placement, SmcConfig, SmcSampler};
+use vpl_smc::{SmcConfig, SmcSampler};
 use vpl_tcas::{TcasConfig, TcasSampler};
 
 /// A parameter error of sampler `name`.
@@ -80,7 +80,7 @@ fn smc_with(cx: &SamplerContext, p: &Params, name: &str, paper: bool) -> Result<
     cx.needs_indirect(name)?;
     let config = smc_settings(&cx.budget, p, paper).map_err(param(name))?;
     // A backend that runs these settings wholly on its device does.
-    if let Some(twin) = cx.services.samplers.as_ref().and_then(|s| s.twin(name, &config)) {
+    if let Some(twin) = cx.services.samplers.as_ref().and_then(|s| s.twin(name, &cx.budget, p)) {
         return twin.map_err(|source| SamplingError::Sampler { name: name.into(), source });
     }
     SmcSampler::with_services(config, cx.services).map(boxed).map_err(|e| SamplingError::sampler(name, e))
@@ -88,12 +88,7 @@ fn smc_with(cx: &SamplerContext, p: &Params, name: &str, paper: bool) -> Result<
 
 /// The toolkit's SMC settings, or the paper's (`paper`: kNN flux at the sites).
 fn smc_settings(budget: &Budget, p: &Params, paper: bool) -> Result<SmcConfig, ParamError> {
-    let mut config = SmcConfig::from_params(budget, p)?;
-    if paper {
-        config.flux = p.get_or("flux", FluxEstimator::Knn)?;
-        config.placement = p.get_or("placement", Placement::Site)?;
-    }
-    Ok(config)
+    if paper { SmcConfig::paper_from_params(budget, p) } else { SmcConfig::from_params(budget, p) }
 }
 
 /// The area probes of the SMC entry's settings (`paper`: `smc-knn`'s),

@@ -102,9 +102,6 @@ mod tests {
         fn memory_bytes(&self) -> usize {
             self.0.memory_bytes()
         }
-        fn as_any(&self) -> &dyn std::any::Any {
-            self
-        }
     }
 
     /// The fused shadow-map loop against the generic one (exact

@@ -30,10 +30,6 @@ impl VplVisibility for RayTraced {
         if scene.visible(x + n_x * scene.epsilon(), *y) { 1.0 } else { 0.0 }
     }
 
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
     fn memory_bytes(&self) -> usize {
         // The BVH is the scene's own; this holds one offset point per slot.
         self.origins.len() * std::mem::size_of::<Option<Vec3>>()

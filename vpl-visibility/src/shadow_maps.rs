@@ -213,10 +213,6 @@ impl VplVisibility for ShadowMaps {
         }
     }
 
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
     fn shadow_maps(&self) -> Option<&dyn ShadowMapSource> {
         Some(self)
     }

@@ -210,6 +210,16 @@ impl SmcConfig {
         },
     ];
 
+    /// [`SmcConfig::from_params`] with the paper's flux estimator: the kNN
+    /// densities (eq. 5 and 7) at the VPLs' own points, unless `p` sets
+    /// `flux` or `placement` (the `smc-knn` sampler's settings).
+    pub fn paper_from_params(budget: &Budget, p: &Params) -> Result<SmcConfig, ParamError> {
+        let mut config = SmcConfig::from_params(budget, p)?;
+        config.flux = p.get_or("flux", FluxEstimator::Knn)?;
+        config.placement = p.get_or("placement", Placement::Site)?;
+        Ok(config)
+    }
+
     /// The settings of `budget` (I and the radiosity paths' bounces,
     /// `max_depth − 3`) with the paper's defaults, changed by `p`'s keys
     /// ([`SmcConfig::KEYS`]).

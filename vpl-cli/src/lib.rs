@@ -305,9 +305,10 @@ struct VplArgs {
     /// Light samples per pixel for direct light.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    /// Where the G-buffer, visibility and shading run.
-    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
-    backend: BackendArg,
+    /// Where the G-buffer, visibility and shading run: a registered backend (cpu; gpu where built)
+    /// or auto, the first device that opens, else the CPU [default: cpu; for `vpl view`: auto].
+    #[arg(long, value_name = "NAME")]
+    backend: Option<String>,
 }
 
 #[derive(Subcommand)]
@@ -383,6 +384,7 @@ where
             match &mut cli.command {
                 Command::Render(a) => a.vpl_args().flags = flags,
                 Command::Sequence(a) => a.vpl_args().flags = flags,
+                Command::View(a) => a.vpl_args().flags = flags,
                 _ => {}
             }
         }
@@ -634,7 +636,7 @@ fn pipeline_spec(
         mode: mode_of(mode),
         direct_samples: v.direct_samples,
         seed,
-        backend: v.backend.backend().name().into(),
+        backend: v.backend.clone().unwrap_or_else(|| "cpu".into()),
     })
 }
 
@@ -668,7 +670,7 @@ fn sampler_params(v: &VplArgs) -> Res<vpl_core::Params> {
 }
 
 /// The subcommands whose `--sampler` takes sampler flags.
-const SAMPLER_COMMANDS: [&str; 2] = ["render", "sequence"];
+const SAMPLER_COMMANDS: [&str; 3] = ["render", "sequence", "view"];
 
 /// One flag for each key the samplers of `registry` read (`--m-max N`),
 /// added to the subcommand `c`: the help gathers what each sampler says of

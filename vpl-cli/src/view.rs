@@ -2,17 +2,6 @@
 
 use super::*;
 
-/// Where the viewer's renderer runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum ViewBackendArg {
-    /// The GPU when there is an adapter, the CPU at reduced resolution otherwise.
-    Auto,
-    /// The CPU (rayon).
-    Cpu,
-    /// The GPU (wgpu); an error without an adapter.
-    Gpu,
-}
-
 /// Open a window that renders VPL frames continuously: fly, switch samplers, split two of them.
 #[derive(clap::Args)]
 pub(super) struct Args {
@@ -22,9 +11,10 @@ pub(super) struct Args {
     /// Let the scene's files name files under this folder too (repeatable).
     #[arg(long, value_name = "PATH")]
     allow_outside: Vec<PathBuf>,
-    /// VPL sampler of the left (or only) side: a registry name.
-    #[arg(long, default_value = "ir")]
-    sampler: String,
+    /// The left (or only) side's pipeline: its sampler, that sampler's parameters, visibility,
+    /// shading and backend.
+    #[command(flatten)]
+    v: VplArgs,
     /// Split view with this sampler on the right.
     #[arg(long)]
     split: Option<String>,
@@ -34,9 +24,6 @@ pub(super) struct Args {
     /// Which light paths to include.
     #[arg(long, value_enum, default_value_t = ModeArg::Full)]
     mode: ModeArg,
-    /// Where the renderer runs.
-    #[arg(long, value_enum, default_value_t = ViewBackendArg::Auto)]
-    backend: ViewBackendArg,
     /// Render resolution over the view's size (default 0.5 on the GPU, 0.25 on the CPU).
     #[arg(long, allow_hyphen_values = true)]
     scale: Option<f32>,
@@ -62,10 +49,17 @@ pub(super) struct Args {
     quiet: bool,
 }
 
+impl Args {
+    /// The pipeline's settings, for the sampler flags made at parse time.
+    pub(super) fn vpl_args(&mut self) -> &mut VplArgs {
+        &mut self.v
+    }
+}
+
 /// Runs `vpl view`.
 #[cfg(feature = "viewer")]
 pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
-    let Args { scene, sampler, split, vpls, mode, backend, scale, window, seed, exposure, reference, script, quiet, allow_outside } = args;
+    let Args { scene, v, split, vpls, mode, scale, window, seed, exposure, reference, script, quiet, allow_outside } = args;
     let script = match script {
         Some(p) => {
             let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
@@ -77,19 +71,19 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         return Err(format!("--exposure must be positive, got {exposure}"));
     }
     let defaults = vpl_viewer::ViewerOptions::new(scene);
-    let pipeline = vpl_render::PipelineSpec {
-        sampler,
-        budget: vpl_core::Budget { vpls, ..defaults.pipeline.budget },
-        mode: mode_of(mode),
-        seed,
-        backend: match backend {
-            ViewBackendArg::Auto => "auto",
-            ViewBackendArg::Cpu => "cpu",
-            ViewBackendArg::Gpu => "gpu",
-        }
-        .into(),
-        ..defaults.pipeline.clone()
-    };
+    // The viewer's defaults where the command line is silent: its depth,
+    // the view's clamp, and the first device that opens.
+    let mut pipeline = pipeline_spec(&v, vpls, defaults.pipeline.budget.max_depth, mode, defaults.pipeline.clamp, seed)?;
+    if v.backend.is_none() {
+        pipeline.backend = vpl_render::AUTO.into();
+    }
+    // The sampler's keys are checked before any window opens (an unknown
+    // sampler is the viewer's to name).
+    if registry.contains(&pipeline.sampler) {
+        registry
+            .build(&pipeline.sampler, pipeline.budget, &vpl_core::Services::cpu(), &pipeline.params)
+            .map_err(|e| sampling_line(&pipeline.sampler, &e))?;
+    }
     let options = vpl_viewer::ViewerOptions {
         window: (window.0, window.1),
         pipeline,

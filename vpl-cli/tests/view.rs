@@ -388,4 +388,55 @@ fn a_bad_script_or_sampler_is_one_line_before_any_window() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("unknown sampler `nonesuch`"), "{stderr}");
+    // The pipeline's flags are read before any window too: a backend is
+    // one of the build's names, a flag one the sampler reads.
+    for (args, says) in [
+        (&["view", "--backend", "abacus"][..], "unknown backend (this build has: auto, cpu"),
+        (&["view", "--sampler", "ir", "--m-max", "3"][..], "--sampler ir does not read --m-max"),
+        (&["view", "--shadowmap-res", "0"][..], "--shadowmap-res"),
+    ] {
+        let out = vpl().args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says) && stderr.trim_end().lines().count() == 1, "{args:?}: {stderr}");
+    }
+}
+
+/// The pipeline's flags reach the viewer's renderers: the sampler's own
+/// flags and `--set` keys go to the left side's sampler (the split side, a
+/// sampler of the panel, starts from its defaults), and visibility, shading
+/// and backend to both, as the screenshot's layout reports them.
+#[test]
+fn the_pipeline_flags_reach_both_sides() {
+    if !has_display() {
+        assert!(std::env::var("VPL_REQUIRE_DISPLAY").is_err(), "VPL_REQUIRE_DISPLAY is set and there is no display");
+        eprintln!("skipped: no display (DISPLAY or WAYLAND_DISPLAY); CI runs this under Xvfb");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot");
+    let script = dir.path().join("session.txt");
+    std::fs::write(&script, format!("frames 1\nscreenshot {}\nquit\n", shot.display())).unwrap();
+    let out = vpl()
+        .args(["view", "--scene", "cornell", "--window", "320x240", "--vpls", "32", "--backend", "cpu"])
+        .args(["--sampler", "smc", "--m-max", "2", "--set", "resample-ratio=4", "--split", "ir"])
+        .args(["--visibility", "raytrace", "--shading", "exhaustive", "--direct-samples", "2", "--script"])
+        .arg(&script)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "vpl view failed: {stderr}");
+    let text = std::fs::read_to_string(dir.path().join("shot.json")).unwrap();
+    let line = text.lines().find(|l| l.contains("\"pipelines\"")).unwrap_or_else(|| panic!("{text}"));
+    let sides: Vec<&str> = line.split('"').filter(|p| p.contains("sampler=")).collect();
+    assert_eq!(sides.len(), 2, "{line}");
+    for (side, sampler) in sides.iter().zip(["smc", "ir"]) {
+        for want in
+            [&format!("sampler={sampler} "), "vpls=32 ", "visibility=raytrace", "shading=exhaustive", "direct-samples=2", "backend=cpu"]
+        {
+            assert!(side.contains(want), "{want} in {side}");
+        }
+    }
+    assert!(sides[0].contains("m-max=2") && sides[0].contains("resample-ratio=4"), "{}", sides[0]);
+    assert!(!sides[1].contains("m-max"), "the split side's sampler starts from its defaults: {}", sides[1]);
 }

@@ -34,16 +34,20 @@ pub fn backend() -> Result<GpuBackend, GpuError> {
     Ok(GpuBackend::new(Gpu::new()?))
 }
 
-/// Registers this backend as `gpu` ([`backend`]: the first adapter found),
-/// so that an application finds it by name ([`vpl_render::Backends`]).
+/// The name this backend is registered and reported under.
+pub const NAME: &str = "gpu";
+
+/// Registers this backend as [`NAME`] ([`backend`]: the first adapter
+/// found), so that an application finds it by name
+/// ([`vpl_render::Backends`]).
 pub fn register(backends: &mut vpl_render::Backends) {
-    backends.register("gpu", "wgpu kernels: G-buffer, shadow maps or shadow rays, shading, filter, SMC's rays and radiosity", || {
+    backends.register(NAME, "wgpu kernels: G-buffer, shadow maps or shadow rays, shading, filter, SMC's rays and radiosity", || {
         Ok(Box::new(backend().map_err(err)?))
     });
 }
 
 fn err(e: impl std::fmt::Display) -> RenderError {
-    RenderError::backend("gpu", e)
+    RenderError::backend(NAME, e)
 }
 
 impl GpuBackend {
@@ -89,7 +93,7 @@ impl DeviceSamplers for DeviceTwins {
 
 impl Backend for GpuBackend {
     fn name(&self) -> &str {
-        "gpu"
+        NAME
     }
 
     fn device(&self) -> Option<String> {

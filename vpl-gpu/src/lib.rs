@@ -113,7 +113,7 @@ mod shadow_maps;
 mod smc;
 mod visibility;
 
-pub use backend::{GpuBackend, backend, register};
+pub use backend::{GpuBackend, NAME, backend, register};
 pub use context::{GpuContext, GpuError, Traffic};
 pub use device::Gpu;
 pub use filter::GpuCrossBilateral;

@@ -323,7 +323,7 @@ impl PyRenderer {
         self.sampler.clone()
     }
 
-    /// The backend the stages run on (`cpu`, `gpu`).
+    /// The backend the stages run on (`cpu`, `gpu`; the one `auto` opened).
     #[getter]
     fn backend(&self) -> String {
         self.backend.clone()

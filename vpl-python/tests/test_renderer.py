@@ -56,6 +56,15 @@ def test_every_builtin_sampler_renders(cornell):
         assert np.isfinite(r.frame(0)).all(), name
 
 
+def test_auto_backend_is_a_device_that_opens_else_the_cpu(cornell):
+    """`backend="auto"`, as on the command line: the first device that
+    opens (a GPU build with an adapter), else the CPU."""
+    r = vpl.Renderer(cornell, sampler="ir", vpls=16, size=(8, 8), backend="auto")
+    assert r.backend in ("cpu", "gpu")
+    assert (r.device is None) == (r.backend == "cpu")
+    assert np.isfinite(r.frame(0)).all()
+
+
 def test_bad_settings_raise_vpl_errors(cornell):
     with pytest.raises(vpl.VplError, match="nope"):
         vpl.Renderer(cornell, sampler="nope")

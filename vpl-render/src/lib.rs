@@ -78,7 +78,7 @@ pub mod sequence;
 mod spec;
 
 pub use backend::{Backend, CpuBackend};
-pub use backends::{BackendEntry, BackendFactory, Backends};
+pub use backends::{AUTO, BackendEntry, BackendFactory, Backends};
 pub use compensation::Compensation;
 pub use error::RenderError;
 pub use frame::{FrameOutput, FrameRequest, FrameSettings, FrameStages, StageTimings, count_non_finite, render_frame};

@@ -25,7 +25,7 @@ pub enum ViewerError {
     /// The window's surface failed.
     #[error("the window's surface failed: {0}")]
     Surface(String),
-    /// `--backend gpu` asked for, and no GPU adapter for the renderer.
+    /// The backend asked for is not in this build, or did not open.
     #[error("{0}")]
     Backend(String),
     /// A frame failed in a scripted session (interactively it is shown on screen).

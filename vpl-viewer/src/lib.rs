@@ -85,31 +85,6 @@ use vpl_core::{Budget, Mode};
 use vpl_render::PipelineSpec;
 use vpl_sampling::Registry;
 
-/// Where the renderer runs: the pipeline's `backend`, `auto`, `cpu` or
-/// `gpu`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum BackendRequest {
-    /// The GPU when there is an adapter, the CPU otherwise.
-    #[default]
-    Auto,
-    /// The CPU.
-    Cpu,
-    /// The GPU; an error without an adapter.
-    Gpu,
-}
-
-impl BackendRequest {
-    /// The request a pipeline's backend name makes.
-    pub(crate) fn named(name: &str) -> Result<BackendRequest, ViewerError> {
-        match name {
-            "auto" => Ok(BackendRequest::Auto),
-            "cpu" => Ok(BackendRequest::Cpu),
-            "gpu" => Ok(BackendRequest::Gpu),
-            other => Err(ViewerError::Invalid(format!("the viewer runs on backend auto, cpu or gpu, not '{other}'"))),
-        }
-    }
-}
-
 /// How the viewer starts.
 #[derive(Clone, Debug)]
 pub struct ViewerOptions {
@@ -153,7 +128,7 @@ impl ViewerOptions {
                 budget: Budget { vpls: 256, ..PipelineSpec::default().budget },
                 mode: Mode::Full,
                 seed: 0,
-                backend: "auto".into(),
+                backend: vpl_render::AUTO.into(),
                 ..PipelineSpec::default()
             },
             scale: None,
@@ -191,7 +166,13 @@ pub fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, Viewe
             return Err(ViewerError::UnknownSampler { name: name.clone(), known: registry.names().join(", ") });
         }
     }
-    BackendRequest::named(&options.pipeline.backend)?;
+    // The pipeline's sampler takes its parameters (a key it does not read
+    // is an error), checked before any window opens.
+    let p = &options.pipeline;
+    registry.build(&p.sampler, p.budget, &vpl_core::Services::cpu(), &p.params).map_err(|e| ViewerError::Invalid(e.to_string()))?;
+    if options.pipeline.backend != vpl_render::AUTO {
+        app::backends().entry(&options.pipeline.backend).map_err(|e| ViewerError::Backend(e.to_string()))?;
+    }
     if options.pipeline.budget.vpls == 0 {
         return Err(ViewerError::Invalid("the VPL budget must be positive".into()));
     }

@@ -78,6 +78,9 @@ pub struct Reference {
 pub struct SideResult {
     /// What it was rendered with.
     pub spec: SideSpec,
+    /// The side's whole pipeline, as a [`PipelineSpec`] reads it (the
+    /// backend by the name of the one made).
+    pub pipeline: String,
     /// The frame.
     pub out: FrameOutput,
     /// The camera it was rendered from.
@@ -115,23 +118,24 @@ pub enum Reply {
 
 /// Where the renderers run.
 pub enum BackendChoice {
-    /// The CPU backend.
-    Cpu,
-    /// The GPU backend on this device (shared by both sides).
+    /// A registered backend, made anew for each side by its entry.
+    Entry(vpl_render::BackendEntry),
+    /// vpl-gpu's backend on this device (shared by both sides and the
+    /// window, which presents the frames they leave there).
     #[cfg(feature = "gpu")]
     Gpu(vpl_gpu::Gpu),
 }
 
 impl BackendChoice {
     /// A backend for one side, and where its frames left on the device appear.
-    fn make(&self) -> (Box<dyn Backend>, Published) {
+    fn make(&self) -> Result<(Box<dyn Backend>, Published), String> {
         match self {
-            BackendChoice::Cpu => (Box::new(vpl_render::CpuBackend), Published::default()),
+            BackendChoice::Entry(e) => Ok(((e.factory)().map_err(|e| e.to_string())?, Published::default())),
             #[cfg(feature = "gpu")]
             BackendChoice::Gpu(gpu) => {
                 let backend = vpl_gpu::GpuBackend::new(gpu.clone());
                 let frames = backend.frames();
-                (Box::new(backend), Published { gpu: Some((gpu.clone(), frames)) })
+                Ok((Box::new(backend), Published { gpu: Some((gpu.clone(), frames)) }))
             }
         }
     }
@@ -168,6 +172,8 @@ impl Accumulation {
 
 struct Side {
     spec: SideSpec,
+    /// [`SideResult::pipeline`].
+    pipeline: String,
     renderer: Renderer,
     index: u64,
     previous: Option<Previous>,
@@ -313,7 +319,7 @@ fn render_job(
         }
         let slot = &mut sides[k];
         if slot.as_ref().is_none_or(|s| s.spec != *spec) {
-            let (backend, published) = backend.make();
+            let (backend, published) = backend.make().map_err(|e| Some(format!("{}: {e}", spec.sampler)))?;
             // The pipeline with the panel's sampler, budget and light paths.
             let mut side = pipeline.clone();
             if side.sampler != spec.sampler {
@@ -322,9 +328,11 @@ fn render_job(
             side.sampler = spec.sampler.clone();
             side.budget.vpls = spec.vpls;
             side.mode = spec.mode;
+            side.backend = backend.name().to_string();
+            let described = side.to_string();
             let renderer =
                 side.builder(registry, &job.scene).boxed_backend(backend).build().map_err(|e| Some(format!("{}: {e}", spec.sampler)))?;
-            *slot = Some(Side { spec: spec.clone(), renderer, index: 0, previous: None, published });
+            *slot = Some(Side { spec: spec.clone(), pipeline: described, renderer, index: 0, previous: None, published });
         }
         let side = slot.as_mut().expect("built above");
         side.renderer.set_read_back(if job.resident { ReadBack::Nothing } else { ReadBack::All });
@@ -370,6 +378,7 @@ fn render_job(
         side.previous = Some(previous);
         out.push(SideResult {
             spec: spec.clone(),
+            pipeline: side.pipeline.clone(),
             out: frame,
             camera: job.camera.clone(),
             change,

@@ -12,7 +12,7 @@ use crate::record::{Pose, Recorder};
 use crate::script::Step;
 use crate::view::{Channel, Composite, Look, Overlay, Pick, SideFrame, against_reference, compose, pick_vpl};
 use crate::worker::{self, BackendChoice, Job, Reference, ReferenceSpec, Reply, SideResult, SideSpec};
-use crate::{BackendRequest, Summary, ViewerError, ViewerOptions};
+use crate::{Summary, ViewerError, ViewerOptions};
 use std::collections::VecDeque;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -22,6 +22,7 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::{Duration, Instant};
 use vpl_core::glam::Vec3;
 use vpl_core::{Light, MaterialPolicy, Mode, Scene, SceneSetup};
+use vpl_render::Backends;
 use vpl_sampling::Registry;
 use vpl_scene_io::ImageFile;
 use winit::application::ApplicationHandler;
@@ -91,12 +92,12 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
     // server while other sessions started on the same Xvfb (a driver's own
     // display connection racing winit's, we think); this order gave none
     // in 14 runs of the six scripted sessions.
-    let (backend, renderer_line, default_scale) = choose_backend(BackendRequest::named(&options.pipeline.backend)?)?;
+    let (backend, renderer_line, default_scale) = choose_backend(&options.pipeline.backend)?;
     // The window presents the renderer's frames from its device when it can.
     #[cfg(feature = "gpu")]
     let shared = match &backend {
         BackendChoice::Gpu(gpu) => Some(gpu.clone()),
-        BackendChoice::Cpu => None,
+        BackendChoice::Entry(_) => None,
     };
     #[cfg(not(feature = "gpu"))]
     let shared = None;
@@ -143,25 +144,56 @@ fn scene_dir(spec: &str) -> PathBuf {
     }
 }
 
-fn choose_backend(req: BackendRequest) -> Result<(BackendChoice, String, f32), ViewerError> {
-    const CPU_SCALE: f32 = 0.25;
-    if req == BackendRequest::Cpu {
-        return Ok((BackendChoice::Cpu, "renderer: CPU (--backend cpu), ¼ resolution".into(), CPU_SCALE));
-    }
+/// The backends the viewer offers: the CPU, and vpl-gpu's where built.
+pub(crate) fn backends() -> Backends {
+    let mut b = Backends::builtin();
     #[cfg(feature = "gpu")]
-    match vpl_gpu::Gpu::new() {
-        Ok(gpu) => {
-            let line = format!("renderer: GPU, {}", gpu.ctx().describe());
-            Ok((BackendChoice::Gpu(gpu), line, 0.5))
-        }
-        Err(e) if req == BackendRequest::Gpu => Err(ViewerError::Backend(e.to_string())),
-        Err(_) => Ok((BackendChoice::Cpu, "renderer: CPU at ¼ resolution (no GPU adapter)".into(), CPU_SCALE)),
-    }
+    vpl_gpu::register(&mut b);
     #[cfg(not(feature = "gpu"))]
-    match req {
-        BackendRequest::Gpu => Err(ViewerError::Backend("this build has no GPU backend (feature `gpu` of vpl-viewer)".into())),
-        _ => Ok((BackendChoice::Cpu, "renderer: CPU at ¼ resolution (built without the GPU backend)".into(), CPU_SCALE)),
+    b.absent("gpu", "built without vpl-viewer's feature `gpu`");
+    b
+}
+
+/// The backend `name` of [`backends`] (or [`vpl_render::AUTO`]: the first
+/// that opens, a device first), a line saying what renders, and the
+/// default render scale: ½ on a device, ¼ on the CPU. vpl-gpu's backend
+/// runs on a device of its own here, which the window shares to present
+/// the frames left there.
+fn choose_backend(name: &str) -> Result<(BackendChoice, String, f32), ViewerError> {
+    let backends = backends();
+    let auto = name == vpl_render::AUTO;
+    let tries = if auto { backends.auto_order() } else { vec![backends.entry(name).map_err(|e| ViewerError::Backend(e.to_string()))?] };
+    let mut failed = Vec::new();
+    for entry in tries {
+        #[cfg(feature = "gpu")]
+        if entry.name == vpl_gpu::NAME {
+            match vpl_gpu::Gpu::new() {
+                Ok(gpu) => {
+                    let line = format!("renderer: GPU, {}", gpu.ctx().describe());
+                    return Ok((BackendChoice::Gpu(gpu), line, 0.5));
+                }
+                Err(e) if !auto => return Err(ViewerError::Backend(e.to_string())),
+                Err(e) => {
+                    failed.push(format!("{}: {e}", entry.name));
+                    continue;
+                }
+            }
+        }
+        match (entry.factory)() {
+            Ok(b) => {
+                let how = if auto && !failed.is_empty() { format!(" ({})", failed.join("; ")) } else { String::new() };
+                let (line, scale) = match b.device() {
+                    Some(d) => (format!("renderer: {}, {d}{how}", b.name()), 0.5),
+                    None if b.name() == "cpu" => (format!("renderer: CPU at ¼ resolution{how}"), 0.25),
+                    None => (format!("renderer: {} at ¼ resolution{how}", b.name()), 0.25),
+                };
+                return Ok((BackendChoice::Entry(*entry), line, scale));
+            }
+            Err(e) if !auto => return Err(ViewerError::Backend(e.to_string())),
+            Err(e) => failed.push(format!("{}: {e}", entry.name)),
+        }
     }
+    Err(ViewerError::Backend(format!("no backend opened ({})", failed.join("; "))))
 }
 
 struct App {

@@ -140,10 +140,12 @@ impl State {
         let view = self.picture.view_rect.map_or([0.0; 4], |r| [r.min.x * ppp, r.min.y * ppp, r.max.x * ppp, r.max.y * ppp]);
         let split =
             self.picture.composite.as_ref().and_then(|c| c.split_x.map(|s| view[0] + (s as f32 / c.width as f32) * (view[2] - view[0])));
-        let sides: Vec<String> = self.picture.last.iter().map(|s| format!("\"{}\"", s.spec.sampler)).collect();
+        let quoted = |t: &str| format!("\"{}\"", t.replace('\\', "\\\\").replace('"', "\\\""));
+        let sides: Vec<String> = self.picture.last.iter().map(|s| quoted(&s.spec.sampler)).collect();
+        let pipelines: Vec<String> = self.picture.last.iter().map(|s| quoted(&s.pipeline)).collect();
         let res = self.picture.composite.as_ref().map_or((0, 0), |c| (c.width, c.height));
         let json = format!(
-            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {},\n  \"reference_passes\": {},\n  \"picked\": {},\n  \"shadow_map\": {}\n}}\n",
+            "{{\n  \"window\": [{w}, {h}],\n  \"view\": [{:.1}, {:.1}, {:.1}, {:.1}],\n  \"split_x\": {},\n  \"render\": [{}, {}],\n  \"sides\": [{}],\n  \"pipelines\": [{}],\n  \"channel\": \"{}\",\n  \"overlay\": \"{}\",\n  \"frames\": {},\n  \"reference_passes\": {},\n  \"picked\": {},\n  \"shadow_map\": {}\n}}\n",
             view[0],
             view[1],
             view[2],
@@ -152,6 +154,7 @@ impl State {
             res.0,
             res.1,
             sides.join(", "),
+            pipelines.join(", "),
             self.channel.name(),
             self.overlay.name(),
             self.frames_shown,

@@ -7,6 +7,7 @@ use vpl_core::glam::Vec3;
 use vpl_core::{CoreError, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 use vpl_render::compare::compare;
+use vpl_scene_io::SceneIoError;
 use vpl_tests::{data_dir, scratch_dir};
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
@@ -115,26 +116,30 @@ fn missing_mtl_gives_the_default_material_and_a_warning() {
     let s = vpl_scene_io::load(&t).unwrap();
     assert!(s.warnings.iter().any(|w| w.contains("nowhere.mtl")));
     // Without one it is a scene without lights.
-    assert!(matches!(vpl_scene_io::load(&p), Err(CoreError::NoLights(_))));
+    assert!(matches!(vpl_scene_io::load(&p), Err(SceneIoError::Core(CoreError::NoLights(_)))));
 }
 
 #[test]
 fn bad_inputs_are_typed_errors() {
     let dir = scratch_dir("loaders-bad");
-    type Case = (String, fn(&CoreError) -> bool);
+    type Case = (String, fn(&SceneIoError) -> bool);
     let cases: Vec<Case> = vec![
-        (write(&dir, "malformed.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::Obj { .. })),
-        (dir.join("missing.obj").to_string_lossy().into_owned(), |e| matches!(e, CoreError::Read { .. })),
-        (write(&dir, "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::NonFinite { .. })),
-        (write(&dir, "inf.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::NonFinite { .. })),
-        (write(&dir, "empty.obj", "# nothing\n"), |e| matches!(e, CoreError::EmptyScene(_))),
-        (write(&dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), |e| matches!(e, CoreError::EmptyScene(_))),
-        (write(&dir, "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, CoreError::NoLights(_))),
+        (write(&dir, "malformed.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, SceneIoError::Obj { .. })),
+        (dir.join("missing.obj").to_string_lossy().into_owned(), |e| matches!(e, SceneIoError::Read { .. })),
+        (write(&dir, "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), |e| {
+            matches!(e, SceneIoError::Core(CoreError::NonFinite { .. }))
+        }),
+        (write(&dir, "inf.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"), |e| {
+            matches!(e, SceneIoError::Core(CoreError::NonFinite { .. }))
+        }),
+        (write(&dir, "empty.obj", "# nothing\n"), |e| matches!(e, SceneIoError::Core(CoreError::EmptyScene(_)))),
+        (write(&dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), |e| matches!(e, SceneIoError::Core(CoreError::EmptyScene(_)))),
+        (write(&dir, "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), |e| matches!(e, SceneIoError::Core(CoreError::NoLights(_)))),
         (write(&dir, "fov0.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 0\n"), |e| {
-            matches!(e, CoreError::Camera(_))
+            matches!(e, SceneIoError::Core(CoreError::Camera(_)))
         }),
         (write(&dir, "fovneg.toml", "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = -30\n"), |e| {
-            matches!(e, CoreError::Camera(_))
+            matches!(e, SceneIoError::Core(CoreError::Camera(_)))
         }),
         (
             write(
@@ -142,15 +147,15 @@ fn bad_inputs_are_typed_errors() {
                 "size0.toml",
                 "[geometry]\nbuiltin = \"cornell\"\n[camera]\norigin = [0,0,3]\ntarget = [0,0,0]\nfov = 40\nresolution = [0, 10]\n",
             ),
-            |e| matches!(e, CoreError::Camera(_)),
+            |e| matches!(e, SceneIoError::Core(CoreError::Camera(_))),
         ),
         (write(&dir, "unknown.toml", "[geometry]\nbuiltin = \"cornell\"\nshiny = true\n"), |e| {
-            matches!(e, CoreError::SceneFile { .. }) && e.to_string().contains("shiny")
+            matches!(e, SceneIoError::Core(CoreError::SceneFile { .. })) && e.to_string().contains("shiny")
         }),
         (write(&dir, "badlight.toml", "[geometry]\nbuiltin = \"cornell\"\n[[lights]]\ntype = \"laser\"\n"), |e| {
-            matches!(e, CoreError::SceneFile { .. })
+            matches!(e, SceneIoError::Core(CoreError::SceneFile { .. }))
         }),
-        ("no-such-builtin".into(), |e| matches!(e, CoreError::UnknownBuiltin(_))),
+        ("no-such-builtin".into(), |e| matches!(e, SceneIoError::Core(CoreError::UnknownBuiltin(_)))),
     ];
     for (path, ok) in cases {
         match vpl_scene_io::load(&path) {

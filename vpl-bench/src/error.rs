@@ -9,6 +9,9 @@ pub enum BenchError {
     /// A scene, camera or image error.
     #[error(transparent)]
     Core(#[from] CoreError),
+    /// A scene or image file could not be read.
+    #[error(transparent)]
+    SceneIo(#[from] vpl_scene_io::SceneIoError),
     /// The renderer (a sampler, a backend, a frame) refused or failed; a
     /// backend's error names the flag that chose it (`--backend gpu: …`).
     #[error("{}", crate::pipeline::backend_message(.0))]

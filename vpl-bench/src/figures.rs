@@ -22,6 +22,7 @@ use vpl_core::{Camera, CoreError, Frame, GBuffer, GeometryClamp, Image, Indirect
 use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_sampling::{SmcConfig, SmcSampler};
 use vpl_scene_io::ImageFile;
+use vpl_scene_io::SceneIoError;
 use vpl_shading::{ExhaustiveShader, InterleavedShader, render_gbuffer};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
@@ -77,7 +78,7 @@ fn err(e: impl std::fmt::Display) -> CoreError {
 }
 
 /// RMSE of `a` against the reference `r` with standard errors `se`, the reference's noise removed (at least 0).
-fn rmse_vs(a: &Image, r: &Image, se: &Image) -> Result<f64, CoreError> {
+fn rmse_vs(a: &Image, r: &Image, se: &Image) -> Result<f64, SceneIoError> {
     Ok((mse(a, r)? - reference_variance(se)).max(0.0).sqrt())
 }
 
@@ -87,13 +88,19 @@ pub fn exposure_for(img: &Image) -> f32 {
     if m > 0.0 { (0.18 / m) as f32 } else { 1.0 }
 }
 
-fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), CoreError> {
+fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), SceneIoError> {
     img.write_exr(dir.join(format!("{stem}.exr")))?;
-    img.write_png(dir.join(format!("{stem}.png")), exposure)
+    Ok(img.write_png(dir.join(format!("{stem}.png")), exposure)?)
 }
 
 /// A path-traced indirect reference (image, standard error) of `spp` samples.
-fn reference(scene: &Scene, camera: &Camera, clamp: Option<GeometryClamp>, spp: u32, seed: u64) -> Result<(Image, Image, f64), CoreError> {
+fn reference(
+    scene: &Scene,
+    camera: &Camera,
+    clamp: Option<GeometryClamp>,
+    spp: u32,
+    seed: u64,
+) -> Result<(Image, Image, f64), SceneIoError> {
     let mut pt = PathTracer::new(5, Mode::Indirect);
     pt.clamp = clamp;
     // The reference draws the materials as the VPL renders it is set beside do.
@@ -103,7 +110,7 @@ fn reference(scene: &Scene, camera: &Camera, clamp: Option<GeometryClamp>, spp: 
 }
 
 /// SMC's VPLs for one frame, after `warmup` iterations.
-fn smc_vpls(scene: &Scene, camera: &Camera, gbuf: &GBuffer, vpls: usize, warmup: u32, seed: u64) -> Result<(VplSet, f64), CoreError> {
+fn smc_vpls(scene: &Scene, camera: &Camera, gbuf: &GBuffer, vpls: usize, warmup: u32, seed: u64) -> Result<(VplSet, f64), SceneIoError> {
     let t = Instant::now();
     let mut smc = SmcSampler::new(SmcConfig { vpls, warmup, ..SmcConfig::default() }).map_err(err)?;
     let frame = Frame { scene, camera, time: 0.0, index: 0, seed, gbuffer: gbuf, previous: None };
@@ -120,7 +127,7 @@ fn shade(gbuf: &GBuffer, set: &VplSet, scene: &Scene, vis: &mut dyn VplVisibilit
 
 /// Figs. 8 and 9 on frame `frame` of `scene_name`: writes the images and
 /// returns the panels of each figure.
-pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> Result<(Vec<Panel>, Vec<Panel>), CoreError> {
+pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> Result<(Vec<Panel>, Vec<Panel>), SceneIoError> {
     let setup = vpl_scene_io::load(scene_name)?;
     let (scene, camera) = setup.frame(frame)?;
     let camera = camera.with_resolution(s.size)?;
@@ -132,7 +139,7 @@ pub fn fig8_9(dir: &Path, scene_name: &str, frame: u32, s: &FigureSettings) -> R
     let gbuf = render_gbuffer(&scene, &camera);
     let (set, smc_s) = smc_vpls(&scene, &camera, &gbuf, vpls, SmcConfig::default().warmup, s.seed)?;
     let panel =
-        |name: &str, label: &str, img: &Image, second: Option<(&Image, Option<&Image>)>, seconds: f64| -> Result<Panel, CoreError> {
+        |name: &str, label: &str, img: &Image, second: Option<(&Image, Option<&Image>)>, seconds: f64| -> Result<Panel, SceneIoError> {
             save(dir, &format!("{scene_name}_{name}"), img, exposure)?;
             let rmse_second = match second {
                 Some((b, Some(se))) => Some(rmse_vs(img, b, se)?),
@@ -202,7 +209,7 @@ pub struct BudgetPoint {
 }
 
 /// Fig. 10 on frame 0 of `scene_name`.
-pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<BudgetPoint>, CoreError> {
+pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<BudgetPoint>, SceneIoError> {
     let setup = vpl_scene_io::load(scene_name)?;
     let (scene, camera) = setup.frame(0)?;
     let camera = camera.with_resolution(s.fig10_size)?;
@@ -237,7 +244,7 @@ pub fn fig10(dir: &Path, scene_name: &str, s: &FigureSettings) -> Result<Vec<Bud
 }
 
 /// Writes `fig8.md` (with Fig. 9) and its CSV/JSON.
-pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &FigureSettings) -> Result<(), CoreError> {
+pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &FigureSettings) -> Result<(), SceneIoError> {
     let mut md = String::from("# Figs. 8 and 9: one frame, path tracing against VPLs\n\n");
     let _ = writeln!(
         md,
@@ -294,7 +301,7 @@ pub fn write_fig8(dir: &Path, figs: &[(String, Vec<Panel>, Vec<Panel>)], s: &Fig
     write_atomic(&dir.join("fig8.md"), md.as_bytes())?;
     write_atomic(&dir.join("fig8.csv"), csv.as_bytes())?;
     let json = serde_json::to_string_pretty(&figs.iter().map(|(s, a, b)| (s, a, b)).collect::<Vec<_>>()).map_err(err)?;
-    write_atomic(&dir.join("fig8.json"), json.as_bytes())
+    Ok(write_atomic(&dir.join("fig8.json"), json.as_bytes())?)
 }
 
 /// Writes `fig10.md`, its CSV/JSON and the error-vs-budget plot.

@@ -19,13 +19,14 @@ use vpl_core::{Camera, CoreError, GeometryClamp, Image, Mode, Scene};
 use vpl_pathtrace::{PathTracer, RenderSettings, render};
 use vpl_progressive::{Progressive, ProgressiveConfig};
 use vpl_scene_io::ImageFile;
+use vpl_scene_io::SceneIoError;
 
 fn err(e: impl std::fmt::Display) -> CoreError {
     CoreError::Invalid(e.to_string())
 }
 
 /// RMSE of `a` against reference `r` with standard errors `se`, the reference's noise removed.
-pub fn rmse_vs(a: &Image, r: &Image, se: &Image) -> Result<f64, CoreError> {
+pub fn rmse_vs(a: &Image, r: &Image, se: &Image) -> Result<f64, SceneIoError> {
     Ok((mse(a, r)? - reference_variance(se)).max(0.0).sqrt())
 }
 
@@ -67,9 +68,9 @@ fn rmse_plain(a: &Image, b: &Image, mask: &[bool]) -> f64 {
     rmse_masked(a, b, &zero, mask)
 }
 
-fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), CoreError> {
+fn save(dir: &Path, stem: &str, img: &Image, exposure: f32) -> Result<(), SceneIoError> {
     img.write_exr(dir.join(format!("{stem}.exr")))?;
-    img.write_png(dir.join(format!("{stem}.png")), exposure)
+    Ok(img.write_png(dir.join(format!("{stem}.png")), exposure)?)
 }
 
 /// Fig. 6's "inverse difference image scaled by 8": 1 − 8·|a − b| per
@@ -83,13 +84,13 @@ pub fn inverse_difference(a: &Image, b: &Image, scale: f32) -> Image {
 }
 
 /// Writes an image of values in [0, 1] as an 8-bit PNG as they are (no tone mapping).
-fn write_unit_png(img: &Image, path: &Path) -> Result<(), CoreError> {
+fn write_unit_png(img: &Image, path: &Path) -> Result<(), SceneIoError> {
     let rgb: Vec<u8> = img.data.iter().flat_map(|p| [p.x, p.y, p.z].map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)).collect();
-    vpl_scene_io::write_png_rgb8(path, img.width, img.height, &rgb)
+    Ok(vpl_scene_io::write_png_rgb8(path, img.width, img.height, &rgb)?)
 }
 
 /// A path-traced full reference (max depth 5): image, standard error, seconds.
-fn pt_reference(scene: &Scene, camera: &Camera, spp: u32, seed: u64) -> Result<(Image, Image, f64), CoreError> {
+fn pt_reference(scene: &Scene, camera: &Camera, spp: u32, seed: u64) -> Result<(Image, Image, f64), SceneIoError> {
     let r = render(scene, camera, &PathTracer::new(5, Mode::Full), RenderSettings { spp, seed, frame: 0 }, &|_, _| {}).map_err(err)?;
     Ok((r.image, r.stderr, r.seconds))
 }
@@ -151,7 +152,7 @@ pub struct Fig7 {
 /// with another seed and a path-traced reference, and writes
 /// `fig7.csv`, `fig7.png`, `fig7_<passes>.png` snapshots with their inverse
 /// difference images and `fig7.json` into `dir`.
-pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig7, CoreError> {
+pub fn fig7(dir: &Path, s: &Fig7Settings, progress: &dyn Fn(&str)) -> Result<Fig7, SceneIoError> {
     let setup = vpl_scene_io::load(&s.scene)?;
     let camera = setup.camera.with_resolution(s.size)?;
     let scene = &setup.scene;
@@ -286,7 +287,7 @@ pub struct Fig8Row {
 }
 
 /// Fig. 8 on one scene: both methods for `seconds` each, RMSE against the reference.
-pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn Fn(&str)) -> Result<Fig8Row, CoreError> {
+pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn Fn(&str)) -> Result<Fig8Row, SceneIoError> {
     let setup = vpl_scene_io::load(scene_name)?;
     let mitsuba = s.mitsuba.as_ref().filter(|_| scene_name == "cornell").map(|d| d.join("reference_path_d5.exr")).filter(|p| p.exists());
     let (camera, reference, reference_se, source) = match mitsuba {
@@ -304,7 +305,7 @@ pub fn fig8_scene(dir: &Path, scene_name: &str, s: &Fig8Settings, progress: &dyn
     };
     let scene = &setup.scene;
     let clamp = GeometryClamp::for_view(s.clamp_budget, scene, &camera);
-    let run = |clamp: Option<GeometryClamp>| -> Result<(Image, u64, f64), CoreError> {
+    let run = |clamp: Option<GeometryClamp>| -> Result<(Image, u64, f64), SceneIoError> {
         progress(&format!("{scene_name}: progressive ({}), {} s", if clamp.is_some() { "clamped" } else { "unclamped" }, s.seconds));
         let mut r = Progressive::new(scene, camera.clone(), ProgressiveConfig { seed: s.seed, clamp, ..ProgressiveConfig::default() })
             .map_err(err)?;

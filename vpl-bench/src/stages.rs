@@ -3,6 +3,7 @@
 use std::time::Instant;
 use vpl_core::{CoreError, GeometryClamp, IndirectShader, Vpl, VplVisibility};
 use vpl_sampling::{InstantRadiosity, IrConfig, Registry};
+use vpl_scene_io::SceneIoError;
 use vpl_shading::{InterleavedShader, direct_light, render_gbuffer};
 use vpl_visibility::ShadowMaps;
 
@@ -47,7 +48,7 @@ fn time<T>(repeat: u32, mut f: impl FnMut() -> T) -> f64 {
 }
 
 /// Times each stage on built-in scene `name` at `size` with `vpls` IR VPLs.
-pub fn bench_stages(name: &str, size: (u32, u32), vpls: usize, repeat: u32) -> Result<StageBench, CoreError> {
+pub fn bench_stages(name: &str, size: (u32, u32), vpls: usize, repeat: u32) -> Result<StageBench, SceneIoError> {
     let setup = vpl_scene_io::load(name)?;
     let scene = &setup.scene;
     let camera = setup.camera.with_resolution(size)?;
@@ -111,12 +112,12 @@ pub struct SmcBench {
 /// the camera walking the scene's sequence from frame `start` (one frame a
 /// step, so indirect visibility has work), after a 20-iteration warm-up at
 /// that frame (not timed).
-pub fn bench_smc(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: u32) -> Result<SmcBench, CoreError> {
+pub fn bench_smc(name: &str, size: (u32, u32), vpls: usize, start: u32, repeat: u32) -> Result<SmcBench, SceneIoError> {
     let setup = vpl_scene_io::load(name)?;
     let config = vpl_sampling::SmcConfig { vpls, ..vpl_sampling::SmcConfig::default() };
     let mut smc = vpl_sampling::SmcSampler::new(config).map_err(|e| CoreError::Invalid(e.to_string()))?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-    let frame = |f: u32| -> Result<_, CoreError> {
+    let frame = |f: u32| -> Result<_, SceneIoError> {
         let (scene, camera) = setup.frame((start + f).min(count - 1))?;
         Ok((scene, camera.with_resolution(size)?))
     };
@@ -169,7 +170,7 @@ pub fn bench_samplers(
     vpls: usize,
     start: u32,
     repeat: u32,
-) -> Result<Vec<SamplerBench>, CoreError> {
+) -> Result<Vec<SamplerBench>, SceneIoError> {
     let setup = vpl_scene_io::load(name)?;
     let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
     let gbuf = vpl_core::GBuffer::empty();

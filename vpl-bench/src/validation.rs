@@ -9,6 +9,7 @@ use std::path::Path;
 use vpl_core::{CoreError, Image, SceneSetup};
 use vpl_pathtrace::{Mode, PathTracer, RenderSettings, render};
 use vpl_scene_io::ImageFile;
+use vpl_scene_io::SceneIoError;
 
 /// One mode's validation result.
 #[derive(Clone, Debug)]
@@ -42,7 +43,7 @@ pub fn validate_cornell(
     spp: u32,
     seed: u64,
     progress: &(dyn Fn(&str, u64, u64) + Sync),
-) -> Result<Vec<ModeValidation>, CoreError> {
+) -> Result<Vec<ModeValidation>, SceneIoError> {
     let setup = SceneSetup::builtin("cornell")?;
     // Every reference is read (and checked) before any rendering starts.
     let mut references = Vec::new();
@@ -71,7 +72,7 @@ pub fn validate_cornell(
 
 /// Writes the difference image (ours − reference, EXR), the |z| image (EXR)
 /// and a PNG of it (grey: |z| up to the critical value, red: failing pixels) into `dir`.
-pub fn write_difference(v: &ModeValidation, dir: &Path) -> Result<(), CoreError> {
+pub fn write_difference(v: &ModeValidation, dir: &Path) -> Result<(), SceneIoError> {
     difference(&v.ours.0, &v.theirs.0).write_exr(dir.join(format!("cornell_{}_difference.exr", v.mode)))?;
     v.comparison.z_image.write_exr(dir.join(format!("cornell_{}_z.exr", v.mode)))?;
     let zc = crate::compare::z_critical(v.comparison.alpha / 3.0) as f32;
@@ -79,7 +80,7 @@ pub fn write_difference(v: &ModeValidation, dir: &Path) -> Result<(), CoreError>
     for p in map.data.iter_mut() {
         *p = if p.x > zc { vpl_core::glam::Vec3::new(8.0, 0.0, 0.0) } else { vpl_core::glam::Vec3::splat(0.4 * p.x / zc) };
     }
-    map.write_png(dir.join(format!("cornell_{}_z.png", v.mode)), 1.0)
+    Ok(map.write_png(dir.join(format!("cornell_{}_z.png", v.mode)), 1.0)?)
 }
 
 /// The Markdown report of a validation run.

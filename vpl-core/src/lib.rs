@@ -21,7 +21,10 @@
 //!
 //! No file format is read or written here: the `vpl-scene-io` crate reads
 //! scene files (TOML, OBJ/MTL, PLY, glTF, Mitsuba XML) through
-//! [`ModelLoader`] and reads and writes EXR and PNG images.
+//! [`ModelLoader`] and reads and writes EXR and PNG images, with its own
+//! error (`SceneIoError`, which holds a [`CoreError`] for what the core
+//! refuses). The core's writes are atomic byte writes
+//! ([`image::write_atomic`]).
 //!
 //! ```
 //! use vpl_core::{SceneSetup, Purpose, stream};

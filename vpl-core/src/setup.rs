@@ -46,7 +46,11 @@ impl SceneSetup {
     /// `[[lights]]`, the sequence's keys, and a glTF file's own camera and
     /// lights) is in the model's frame: `geometry.up = "z"` turns all of it
     /// to the toolkit's +Y up, and `geometry.scale` scales all positions.
-    pub fn from_description(file: SceneFile, base: &Path, models: &dyn ModelLoader) -> Result<SceneSetup> {
+    pub fn from_description<L: ModelLoader + ?Sized>(
+        file: SceneFile,
+        base: &Path,
+        models: &L,
+    ) -> std::result::Result<SceneSetup, L::Error> {
         let mut warnings = Vec::new();
         let frame = ModelFrame::of(&file.geometry);
         let (Model { name, mut mesh, mut materials, lights: file_lights, camera: file_camera, two_sided: two_sided_default }, defaults) =
@@ -332,8 +336,11 @@ pub struct Model {
 /// `warnings`. `vpl-scene-io` implements it for its file formats, behind
 /// its sandbox and input limits.
 pub trait ModelLoader {
+    /// What a failed read says; the core's own errors (a bad value in the
+    /// description) convert into it.
+    type Error: From<CoreError>;
     /// The model of `geometry`.
-    fn load_model(&self, geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Model>;
+    fn load_model(&self, geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> std::result::Result<Model, Self::Error>;
 }
 
 /// A [`ModelLoader`] that reads no files: descriptions of built-ins only.
@@ -341,6 +348,8 @@ pub trait ModelLoader {
 pub struct NoModelFiles;
 
 impl ModelLoader for NoModelFiles {
+    type Error = CoreError;
+
     fn load_model(&self, geometry: &GeometrySpec, _base: &Path, _warnings: &mut Vec<String>) -> Result<Model> {
         let named = [&geometry.obj, &geometry.gltf, &geometry.mitsuba].into_iter().flatten().next().cloned().unwrap_or_default();
         Err(CoreError::Invalid(format!("{named}: reading model files needs the vpl-scene-io crate")))

@@ -42,6 +42,7 @@
 //! reader does not know is refused by name.
 
 use crate::bitmap::{AlphaUse, Depth, Texels};
+use crate::error::{Result, SceneIoError};
 use crate::input::{MAX_IMAGE_BYTES, MAX_MESH_BYTES, read_bytes};
 use crate::sandbox::Sandbox;
 use glam::{Mat3, Mat4, Vec3};
@@ -50,8 +51,8 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use vpl_core::CoreError;
 use vpl_core::camera::FovAxis;
-use vpl_core::error::{CoreError, Result};
 use vpl_core::material::{Layered, Material};
 use vpl_core::mesh::{Mesh, TriangleDesc};
 use vpl_core::scene_file::{CameraSpec, LightSpec};
@@ -103,7 +104,7 @@ pub fn load_gltf(path: &Path, camera: Option<&str>) -> Result<GltfData> {
 /// [`load_gltf`] reading buffers and images only where `sandbox` allows,
 /// and within its memory limit.
 pub fn load_gltf_in(path: &Path, camera: Option<&str>, sandbox: &Sandbox) -> Result<GltfData> {
-    let err = |reason: String| CoreError::Gltf { path: path.into(), reason };
+    let err = |reason: String| SceneIoError::Gltf { path: path.into(), reason };
     let bytes = read_bytes(path, MAX_MESH_BYTES)?;
     check_glb_header(&bytes).map_err(err)?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
@@ -240,8 +241,8 @@ struct Walk {
 }
 
 impl Reader<'_> {
-    fn err(&self, reason: String) -> CoreError {
-        CoreError::Gltf { path: self.path.clone(), reason }
+    fn err(&self, reason: String) -> SceneIoError {
+        SceneIoError::Gltf { path: self.path.clone(), reason }
     }
 
     fn node(&mut self, node: &gltf::Node, parent: Mat4, state: &mut Walk, depth: usize) -> Result<()> {
@@ -496,9 +497,9 @@ impl Reader<'_> {
             .map_err(|_| fail("its URI's %-escapes do not decode to UTF-8".into()))?;
         // A reference that leaves the sandbox keeps its own error; others
         // say which buffer or image they are.
-        let wrap = |e: CoreError| match e {
-            e @ CoreError::OutsideScene { .. } => e,
-            CoreError::Invalid(r) => fail(r),
+        let wrap = |e: SceneIoError| match e {
+            e @ SceneIoError::OutsideScene { .. } => e,
+            SceneIoError::Core(CoreError::Invalid(r)) => fail(r),
             e => fail(e.to_string()),
         };
         let file = self.sandbox.resolve(&self.base, &decoded).map_err(wrap)?;

@@ -1,9 +1,10 @@
 //! Image files: OpenEXR (32-bit float RGB, read and written) and PNG
 //! previews (Reinhard + sRGB, 8 bits), written atomically.
 
+use crate::error::{Result, SceneIoError};
 use std::path::Path;
+use vpl_core::CoreError;
 use vpl_core::Image;
-use vpl_core::error::{CoreError, Result};
 #[cfg(feature = "exr")]
 use vpl_core::glam::Vec3;
 use vpl_core::image::{linear_to_srgb, reinhard, write_atomic};
@@ -24,14 +25,14 @@ pub trait ImageFile: Sized {
     fn decode_exr(bytes: &[u8], path: &Path) -> Result<Self>;
 
     /// Writes a 32-bit float RGB OpenEXR file, atomically.
-    fn write_exr(&self, path: impl AsRef<Path>) -> Result<()>;
+    fn write_exr(&self, path: impl AsRef<Path>) -> vpl_core::Result<()>;
 
     /// The bytes of a 32-bit float RGB OpenEXR file of this image.
     fn encode_exr(&self) -> std::result::Result<Vec<u8>, String>;
 
     /// Writes an 8-bit sRGB PNG of the Reinhard-tone-mapped image,
     /// atomically. `exposure` scales radiance before tone mapping.
-    fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> Result<()>;
+    fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> vpl_core::Result<()>;
 
     /// The PNG file [`ImageFile::write_png`] writes, in memory.
     fn encode_png(&self, exposure: f32) -> std::result::Result<Vec<u8>, String>;
@@ -47,7 +48,7 @@ impl ImageFile for Image {
     #[cfg(feature = "exr")]
     fn decode_exr(bytes: &[u8], path: &Path) -> Result<vpl_core::Image> {
         use exr::prelude::*;
-        let bad = |reason: String| CoreError::Image(format!("{}: {reason}", path.display()));
+        let bad = |reason: String| SceneIoError::from(CoreError::Image(format!("{}: {reason}", path.display())));
         let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).map_err(|e| bad(e.to_string()))?;
         for h in meta.headers.iter() {
             let (w, hgt) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
@@ -70,20 +71,20 @@ impl ImageFile for Image {
         if let Some(i) = img.data.iter().position(|p| !p.is_finite()) {
             let p = img.data[i];
             let (x, y) = (i as u32 % img.width.max(1), i as u32 / img.width.max(1));
-            return Err(CoreError::BadValue {
+            return Err(SceneIoError::from(CoreError::BadValue {
                 what: format!("{} pixel ({x}, {y})", path.display()),
                 reason: format!("{} {} {} is not finite", p.x, p.y, p.z),
-            });
+            }));
         }
         Ok(img)
     }
 
     #[cfg(not(feature = "exr"))]
     fn decode_exr(_bytes: &[u8], path: &Path) -> Result<Image> {
-        Err(CoreError::Image(format!("{}: reading EXR files needs vpl-scene-io's `exr` feature", path.display())))
+        Err(SceneIoError::from(CoreError::Image(format!("{}: reading EXR files needs vpl-scene-io's `exr` feature", path.display()))))
     }
 
-    fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
+    fn write_exr(&self, path: impl AsRef<Path>) -> vpl_core::Result<()> {
         let path = path.as_ref();
         let bytes = self.encode_exr().map_err(|reason| CoreError::Write { path: path.into(), reason })?;
         write_atomic(path, &bytes)
@@ -111,7 +112,7 @@ impl ImageFile for Image {
         Err("writing EXR files needs vpl-scene-io's `exr` feature".into())
     }
 
-    fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> Result<()> {
+    fn write_png(&self, path: impl AsRef<Path>, exposure: f32) -> vpl_core::Result<()> {
         let path = path.as_ref();
         let png = self.encode_png(exposure).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
         write_atomic(path, &png)
@@ -128,7 +129,7 @@ impl ImageFile for Image {
 }
 
 /// Writes 8-bit RGB pixels (row-major, 3 bytes a pixel) as a PNG, atomically.
-pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> vpl_core::Result<()> {
     let out = encode_png_rgb8(width, height, rgb).map_err(|reason| CoreError::Write { path: path.into(), reason })?;
     write_atomic(path, &out)
 }

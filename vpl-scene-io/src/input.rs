@@ -6,9 +6,9 @@
 //! Every file the toolkit reads goes through [`read_bytes`] or [`read_text`]
 //! with one of the limits below.
 
+use crate::error::{Result, SceneIoError};
 use std::io::Read;
 use std::path::Path;
-use vpl_core::error::{CoreError, Result};
 
 /// The most bytes an OBJ file may have (4 GiB: about 40 M triangles).
 pub const MAX_MESH_BYTES: u64 = 4 << 30;
@@ -22,8 +22,8 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 
 /// The bytes of the regular file `path`, at most `limit` of them.
 ///
-/// Refuses a path that is no regular file ([`CoreError::NotAFile`]) and a file
-/// longer than `limit` ([`CoreError::TooLarge`]); both the size the file system
+/// Refuses a path that is no regular file ([`SceneIoError::NotAFile`]) and a file
+/// longer than `limit` ([`SceneIoError::TooLarge`]); both the size the file system
 /// reports and the bytes actually read are checked, so a file that grows
 /// while it is read is refused too.
 ///
@@ -32,20 +32,20 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// and looked at again, so a path swapped for a FIFO in between is refused
 /// too instead of hanging the read.
 pub fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>> {
-    let read_err = |source| CoreError::Read { path: path.into(), source };
+    let read_err = |source| SceneIoError::Read { path: path.into(), source };
     check_regular_file(path)?;
     let file = open_without_blocking(path).map_err(read_err)?;
     let meta = file.metadata().map_err(read_err)?;
     if !meta.is_file() {
-        return Err(CoreError::NotAFile { path: path.into(), kind: kind_of(&meta) });
+        return Err(SceneIoError::NotAFile { path: path.into(), kind: kind_of(&meta) });
     }
     if meta.len() > limit {
-        return Err(CoreError::TooLarge { path: path.into(), size: meta.len(), limit });
+        return Err(SceneIoError::TooLarge { path: path.into(), size: meta.len(), limit });
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     file.take(limit + 1).read_to_end(&mut bytes).map_err(read_err)?;
     if bytes.len() as u64 > limit {
-        return Err(CoreError::TooLarge { path: path.into(), size: bytes.len() as u64, limit });
+        return Err(SceneIoError::TooLarge { path: path.into(), size: bytes.len() as u64, limit });
     }
     Ok(bytes)
 }
@@ -54,7 +54,7 @@ pub fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>> {
 /// a leading byte-order mark.
 pub fn read_text(path: &Path, limit: u64) -> Result<String> {
     let bytes = read_bytes(path, limit)?;
-    let text = String::from_utf8(bytes).map_err(|e| CoreError::Encoding { path: path.into(), offset: e.utf8_error().valid_up_to() })?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneIoError::Encoding { path: path.into(), offset: e.utf8_error().valid_up_to() })?;
     Ok(match text.strip_prefix('\u{feff}') {
         Some(rest) => rest.to_string(),
         None => text,
@@ -63,8 +63,8 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String> {
 
 /// Checks that `path` names an existing regular file without reading it.
 pub fn check_regular_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|source| CoreError::Read { path: path.into(), source })?;
-    if meta.is_file() { Ok(()) } else { Err(CoreError::NotAFile { path: path.into(), kind: kind_of(&meta) }) }
+    let meta = std::fs::metadata(path).map_err(|source| SceneIoError::Read { path: path.into(), source })?;
+    if meta.is_file() { Ok(()) } else { Err(SceneIoError::NotAFile { path: path.into(), kind: kind_of(&meta) }) }
 }
 
 /// `path` opened for reading; on Unix with `O_NONBLOCK`, which a regular
@@ -91,7 +91,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("vpl-core-input-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let e = read_bytes(&dir, 10).unwrap_err();
-        assert!(matches!(e, CoreError::NotAFile { .. }) && e.to_string().contains("directory"), "{e}");
+        assert!(matches!(e, SceneIoError::NotAFile { .. }) && e.to_string().contains("directory"), "{e}");
         #[cfg(unix)]
         {
             let e = read_bytes(Path::new("/dev/zero"), 10).unwrap_err();
@@ -101,7 +101,7 @@ mod tests {
         std::fs::write(&f, "\u{feff}hello").unwrap();
         assert_eq!(read_text(&f, 100).unwrap(), "hello");
         let e = read_bytes(&f, 4).unwrap_err();
-        assert!(matches!(e, CoreError::TooLarge { size: 8, limit: 4, .. }), "{e}");
+        assert!(matches!(e, SceneIoError::TooLarge { size: 8, limit: 4, .. }), "{e}");
         std::fs::write(&f, [b'a', 0xff, b'b']).unwrap();
         assert!(read_text(&f, 100).unwrap_err().to_string().contains("offset 1"));
         std::fs::remove_dir_all(&dir).unwrap();

@@ -16,6 +16,11 @@
 //! `gltf`, `mitsuba` (which needs `obj` and `ply`), `exr` and `png`. A format
 //! left out answers an error that names its feature.
 //!
+//! Reading fails with a [`SceneIoError`]: what a format or an input guard
+//! says, or the core's [`vpl_core::CoreError`] for what the file describes
+//! (a bad value, an empty scene, an unknown built-in). Writing images fails
+//! with the core's error alone.
+//!
 //! ```
 //! use vpl_scene_io::{ImageFile, load};
 //!
@@ -34,6 +39,7 @@
 
 #[cfg(any(feature = "gltf", feature = "mitsuba"))]
 pub mod bitmap;
+pub mod error;
 #[cfg(feature = "gltf")]
 pub mod gltf;
 pub mod image_file;
@@ -50,6 +56,7 @@ pub mod ply;
 pub mod sandbox;
 pub mod scene_toml;
 
+pub use error::SceneIoError;
 pub use image_file::{ImageFile, encode_png_rgb8, write_png_rgb8};
 pub use loader::{Files, from_file, from_file_with, load, load_with};
 pub use sandbox::LoadOptions;

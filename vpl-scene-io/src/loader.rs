@@ -1,11 +1,12 @@
 //! Loading what a user names: a built-in scene, a TOML scene file, or a
 //! bare model file, each read inside its sandbox.
 
+use crate::error::{Result, SceneIoError};
 use crate::sandbox::{LoadOptions, Sandbox};
 use std::path::Path;
+use vpl_core::CoreError;
 use vpl_core::SceneSetup;
 use vpl_core::builtin;
-use vpl_core::error::{CoreError, Result};
 use vpl_core::scene_file::{GeometrySpec, SceneFile};
 use vpl_core::setup::{Model, ModelLoader};
 
@@ -31,13 +32,17 @@ pub fn load_with(spec: &str, options: &LoadOptions) -> Result<SceneSetup> {
             let mut options = options.clone();
             options.allow_outside.extend(file.geometry.allow_outside.iter().map(|r| folder.join(r)));
             let sandbox = Sandbox::for_scene(path, &options).map_err(|e| match e {
-                CoreError::Invalid(r) => CoreError::Invalid(r.replace("--allow-outside", "geometry.allow_outside")),
+                SceneIoError::Core(CoreError::Invalid(r)) => {
+                    CoreError::Invalid(r.replace("--allow-outside", "geometry.allow_outside")).into()
+                }
                 e => e,
             })?;
             // Values the description holds are named with the file they come from.
             SceneSetup::from_description(file, folder, &Files { sandbox: Some(sandbox) }).map_err(|e| match e {
-                CoreError::BadValue { what, reason } => CoreError::BadValue { what: format!("{spec}: {what}"), reason },
-                CoreError::Invalid(s) => CoreError::Invalid(format!("{spec}: {s}")),
+                SceneIoError::Core(CoreError::BadValue { what, reason }) => {
+                    CoreError::BadValue { what: format!("{spec}: {what}"), reason }.into()
+                }
+                SceneIoError::Core(CoreError::Invalid(s)) => CoreError::Invalid(format!("{spec}: {s}")).into(),
                 e => e,
             })
         }
@@ -57,9 +62,9 @@ pub fn load_with(spec: &str, options: &LoadOptions) -> Result<SceneSetup> {
             let file = SceneFile { geometry, camera: None, lights: None, materials: Vec::new(), sequence: None };
             SceneSetup::from_description(file, Path::new(""), &Files { sandbox: Some(Sandbox::for_scene(path, options)?) })
         }
-        _ if builtin::NAMES.contains(&spec) => SceneSetup::builtin(spec),
-        _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf, .glb or .xml"))),
-        _ => Err(CoreError::UnknownBuiltin(spec.to_string())),
+        _ if builtin::NAMES.contains(&spec) => Ok(SceneSetup::builtin(spec)?),
+        _ if path.exists() => Err(CoreError::Invalid(format!("{spec}: scene files must end in .toml, .obj, .gltf, .glb or .xml")).into()),
+        _ => Err(CoreError::UnknownBuiltin(spec.to_string()).into()),
     }
 }
 
@@ -88,6 +93,8 @@ pub struct Files {
 }
 
 impl ModelLoader for Files {
+    type Error = SceneIoError;
+
     fn load_model(&self, geometry: &GeometrySpec, base: &Path, warnings: &mut Vec<String>) -> Result<Model> {
         let own;
         let sandbox = match &self.sandbox {
@@ -163,8 +170,8 @@ fn mitsuba_model(geometry: &GeometrySpec, base: &Path, sandbox: &Sandbox, warnin
 
 /// The error of a format whose feature is off.
 #[cfg(not(all(feature = "obj", feature = "gltf", feature = "mitsuba")))]
-fn missing(file: Option<&str>, format: &str, feature: &str) -> CoreError {
-    CoreError::Invalid(format!("{}: reading {format} files needs vpl-scene-io's `{feature}` feature", file.unwrap_or_default()))
+fn missing(file: Option<&str>, format: &str, feature: &str) -> SceneIoError {
+    CoreError::Invalid(format!("{}: reading {format} files needs vpl-scene-io's `{feature}` feature", file.unwrap_or_default())).into()
 }
 
 /// Without the `mitsuba` feature there is no Mitsuba reader.

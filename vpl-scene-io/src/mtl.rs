@@ -25,10 +25,10 @@
 //! file is no material library (an `mtllib` that names the OBJ itself) and is
 //! an error.
 
+use crate::error::{Result, SceneIoError};
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::Path;
-use vpl_core::error::{CoreError, Result};
 use vpl_core::validate::MAX_RADIANCE;
 
 /// One `newmtl` block, as written (absent statements are `None`).
@@ -125,7 +125,7 @@ pub fn parse_mtl(text: &str, path: &Path) -> Result<MtlLibrary> {
         let line = raw.split('#').next().unwrap_or("").trim();
         let Some(keyword) = line.split_whitespace().next() else { continue };
         let rest = line[keyword.len()..].trim();
-        let err = |reason: String| CoreError::Mtl { path: path.into(), line: line_no, reason };
+        let err = |reason: String| SceneIoError::Mtl { path: path.into(), line: line_no, reason };
         if keyword == "newmtl" {
             if rest.is_empty() {
                 return Err(err("newmtl needs a name".into()));
@@ -278,7 +278,7 @@ mod tests {
             ("v 0 0 0\nf 1 2 3\n", 1, "no material library"),
         ] {
             let e = parse(text).unwrap_err();
-            assert!(matches!(&e, CoreError::Mtl { line: l, .. } if *l == line), "{text:?}: {e}");
+            assert!(matches!(&e, SceneIoError::Mtl { line: l, .. } if *l == line), "{text:?}: {e}");
             assert!(e.to_string().contains(needle) && e.to_string().starts_with(&format!("m.mtl:{line}:")), "{text:?}: {e}");
         }
     }

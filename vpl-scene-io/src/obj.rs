@@ -13,6 +13,7 @@
 //! [`vpl_core::bsdf`] (see [`layered_from_mtl`]); the VPL pipeline still reads
 //! `Kd` only, the path tracer and the progressive renderer the layers.
 
+use crate::error::{Result, SceneIoError};
 use crate::input::{self, MAX_MESH_BYTES, MAX_TEXT_BYTES};
 use crate::mtl::{MtlMaterial, parse_mtl};
 use crate::sandbox::Sandbox;
@@ -20,7 +21,6 @@ use glam::Vec3;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use vpl_core::error::{CoreError, Result};
 use vpl_core::material::{Layered, Material};
 use vpl_core::mesh::{Mesh, TriangleDesc};
 
@@ -53,7 +53,7 @@ pub fn load_obj_in(path: &Path, sandbox: &Sandbox) -> Result<ObjData> {
     parse_obj(&bytes, path, |name| {
         let found = sandbox.resolve(&dir, name).and_then(|p| input::read_text(&p, MAX_TEXT_BYTES).map(|t| (p, t)));
         match found {
-            Err(CoreError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(SceneIoError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(e),
             Ok(found) => Ok(Some(found)),
         }
@@ -79,7 +79,7 @@ pub fn parse_obj(bytes: &[u8], path: &Path, library: impl Fn(&str) -> Result<Opt
     if let Some(e) = libs.error {
         return Err(e);
     }
-    let (models, _) = loaded.map_err(|e| CoreError::Obj { path: path.into(), reason: e.to_string() })?;
+    let (models, _) = loaded.map_err(|e| SceneIoError::Obj { path: path.into(), reason: e.to_string() })?;
     warnings.extend(libs.warnings);
     let mut materials: Vec<Material> = Vec::with_capacity(libs.materials.len());
     for m in &libs.materials {
@@ -126,7 +126,7 @@ struct Libraries {
     index: BTreeMap<String, usize>,
     warnings: Vec<String>,
     /// The first hard error; loading stops reporting it.
-    error: Option<CoreError>,
+    error: Option<SceneIoError>,
 }
 
 impl Libraries {
@@ -201,7 +201,7 @@ fn prescan(bytes: &[u8], path: &Path) -> Result<BTreeMap<String, usize>> {
                         } else {
                             continue;
                         };
-                        return Err(CoreError::Obj { path: path.into(), reason: format!("line {}: {reason}", i + 1) });
+                        return Err(SceneIoError::Obj { path: path.into(), reason: format!("line {}: {reason}", i + 1) });
                     }
                 }
             }
@@ -330,13 +330,13 @@ mod tests {
     #[cfg(unix)]
     fn devices_are_refused_as_obj_and_as_mtl() {
         let e = load_obj(Path::new("/dev/zero")).unwrap_err();
-        assert!(matches!(e, CoreError::NotAFile { .. }), "{e}");
+        assert!(matches!(e, SceneIoError::NotAFile { .. }), "{e}");
         let dir = std::env::temp_dir().join(format!("vpl-core-obj-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("s.obj"), format!("mtllib /dev/zero\n{QUAD}")).unwrap();
         // Outside the OBJ's folder: refused by the sandbox, naming it.
         let e = load_obj(&dir.join("s.obj")).unwrap_err();
-        assert!(matches!(e, CoreError::OutsideScene { .. }) && e.to_string().contains("/dev/zero"), "{e}");
+        assert!(matches!(e, SceneIoError::OutsideScene { .. }) && e.to_string().contains("/dev/zero"), "{e}");
         // Allowed there, it is still no regular file.
         let sandbox = Sandbox::for_scene(&dir.join("s.obj"), &crate::LoadOptions::allowing("/dev")).unwrap();
         let e = load_obj_in(&dir.join("s.obj"), &sandbox).unwrap_err();

@@ -3,12 +3,13 @@
 //! `nx ny nz`, and faces as `vertex_indices` (or `vertex_index`) lists,
 //! polygons split into fans. Other elements and properties are ignored.
 
+use crate::error::{Result, SceneIoError};
 use crate::input::{MAX_MESH_BYTES, read_bytes};
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 use std::path::Path;
-use vpl_core::error::{CoreError, Result};
+use vpl_core::CoreError;
 use vpl_core::mesh::{Mesh, TriangleDesc};
 
 /// Reads a PLY mesh; every triangle gets material 0.
@@ -79,7 +80,7 @@ fn scalar_size(t: &str) -> Option<u64> {
 
 /// Parses PLY bytes (`path` names them in errors).
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh> {
-    let err = |reason: String| CoreError::Ply { path: path.into(), reason };
+    let err = |reason: String| SceneIoError::Ply { path: path.into(), reason };
     check_counts(bytes).map_err(err)?;
     let ply = Parser::<DefaultElement>::new().read_ply(&mut std::io::Cursor::new(bytes)).map_err(|e| err(one_line(&e.to_string())))?;
     let vertices = ply.payload.get("vertex").ok_or_else(|| err("no vertex element".into()))?;
@@ -105,7 +106,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh> {
             scalar(v, "z").ok_or_else(|| err(format!("vertex {i} has no number z")))?,
         );
         if !p.is_finite() {
-            return Err(CoreError::NonFinite { what: path.display().to_string(), index: i, value: format!("{p}") });
+            return Err(CoreError::NonFinite { what: path.display().to_string(), index: i, value: format!("{p}") }.into());
         }
         mesh.positions.push(p);
         if has_normals {

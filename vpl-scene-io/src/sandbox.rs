@@ -13,8 +13,9 @@
 //! process changes between the check and the read is outside what this
 //! guards.
 
+use crate::error::{Result, SceneIoError};
 use std::path::{Path, PathBuf};
-use vpl_core::error::{CoreError, Result};
+use vpl_core::CoreError;
 
 /// How a scene is loaded: which folders besides its own its files may read,
 /// and how much memory loading may take.
@@ -69,17 +70,17 @@ impl Sandbox {
     /// to `from`, the folder of the file that holds it, or an absolute one)
     /// joined to `from`, if its canonical form lies inside the sandbox.
     ///
-    /// Refuses a reference that leaves every root ([`CoreError::OutsideScene`])
-    /// and one that names nothing ([`CoreError::Read`], naming the path).
+    /// Refuses a reference that leaves every root ([`SceneIoError::OutsideScene`])
+    /// and one that names nothing ([`SceneIoError::Read`], naming the path).
     pub fn resolve(&self, from: &Path, reference: &str) -> Result<PathBuf> {
         if reference.is_empty() {
-            return Err(CoreError::Invalid("an empty file name".into()));
+            return Err(CoreError::Invalid("an empty file name".into()).into());
         }
         if reference.contains('\0') {
-            return Err(CoreError::Invalid(format!("the file name {reference:?} holds a NUL byte")));
+            return Err(CoreError::Invalid(format!("the file name {reference:?} holds a NUL byte")).into());
         }
         let joined = from.join(reference);
-        let outside = || CoreError::OutsideScene { reference: reference.to_string(), root: self.roots[0].clone() };
+        let outside = || SceneIoError::OutsideScene { reference: reference.to_string(), root: self.roots[0].clone() };
         // First by the names alone, so that whether a file outside exists
         // is never looked at (an error could tell it); then with links
         // resolved.
@@ -113,7 +114,7 @@ fn lexically_normal(path: &Path) -> PathBuf {
 /// not exist.
 fn canonical(path: &Path) -> Result<PathBuf> {
     let p = if path.as_os_str().is_empty() { Path::new(".") } else { path };
-    std::fs::canonicalize(p).map_err(|source| CoreError::Read { path: path.into(), source })
+    std::fs::canonicalize(p).map_err(|source| SceneIoError::Read { path: path.into(), source })
 }
 
 #[cfg(test)]
@@ -136,21 +137,21 @@ mod tests {
         let secret = dir.path().join("secret");
         for reference in ["../secret", secret.to_str().unwrap()] {
             let e = sandbox.resolve(&scene, reference).unwrap_err();
-            assert!(matches!(e, CoreError::OutsideScene { .. }), "{e}");
+            assert!(matches!(e, SceneIoError::OutsideScene { .. }), "{e}");
             assert!(e.to_string().contains(reference) && e.to_string().contains("--allow-outside"), "{e}");
         }
         // A link inside the folder that points out of it.
         #[cfg(unix)]
         {
             std::os::unix::fs::symlink(&secret, scene.join("link")).unwrap();
-            assert!(matches!(sandbox.resolve(&scene, "link").unwrap_err(), CoreError::OutsideScene { .. }));
+            assert!(matches!(sandbox.resolve(&scene, "link").unwrap_err(), SceneIoError::OutsideScene { .. }));
         }
         let allowed = Sandbox::for_scene(&file, &LoadOptions::allowing(dir.path())).unwrap();
         assert!(allowed.resolve(&scene, "../secret").is_ok());
         // Outside and missing: refused as outside, so an error never tells
         // whether a file outside exists.
         let e = sandbox.resolve(&scene, "../no/such/file").unwrap_err();
-        assert!(matches!(e, CoreError::OutsideScene { .. }), "{e}");
+        assert!(matches!(e, SceneIoError::OutsideScene { .. }), "{e}");
         // A missing file is named; a missing root is refused as a bad option.
         let e = sandbox.resolve(&scene, "nothing.bin").unwrap_err();
         assert!(e.to_string().contains("nothing.bin"), "{e}");

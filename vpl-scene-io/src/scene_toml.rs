@@ -1,10 +1,11 @@
 //! Scene files in TOML (schema in DESIGN.md): read, checked and written.
 //! Unknown keys are errors.
 
+use crate::error::Result;
 use std::path::Path;
+use vpl_core::CoreError;
 #[cfg(feature = "toml")]
 use vpl_core::SceneSetup;
-use vpl_core::error::{CoreError, Result};
 use vpl_core::scene_file::SceneFile;
 
 /// Parses TOML text and checks it ([`SceneFile::validate`]); `path` only
@@ -20,7 +21,7 @@ pub fn parse_scene_file(text: &str, path: &Path) -> Result<SceneFile> {
 /// Without the `toml` feature there is no scene file reader.
 #[cfg(not(feature = "toml"))]
 pub fn parse_scene_file(_text: &str, path: &Path) -> Result<SceneFile> {
-    Err(CoreError::SceneFile { path: path.into(), reason: "reading scene files needs vpl-scene-io's `toml` feature".into() })
+    Err(CoreError::SceneFile { path: path.into(), reason: "reading scene files needs vpl-scene-io's `toml` feature".into() }.into())
 }
 
 /// Reads and parses a scene file (at most

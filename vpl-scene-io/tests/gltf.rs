@@ -3,9 +3,10 @@
 #![cfg(feature = "gltf")]
 
 use std::path::{Path, PathBuf};
+use vpl_core::Light;
 use vpl_core::glam::Vec3;
 use vpl_core::scene_file::LightSpec;
-use vpl_core::{CoreError, Light};
+use vpl_scene_io::SceneIoError;
 use vpl_scene_io::gltf::{average_colour, kappa_from_roughness, load_gltf};
 
 fn data(p: &str) -> PathBuf {
@@ -44,7 +45,7 @@ fn box_has_twelve_triangles_a_rotated_unit_cube_and_a_red_rough_metal_drawn_as_l
 #[test]
 fn a_buffer_that_does_not_match_its_accessors_is_refused_by_name() {
     let e = load_gltf(&data("BoxTextured/BoxTextured.gltf"), None).unwrap_err();
-    assert!(matches!(e, CoreError::Gltf { .. }));
+    assert!(matches!(e, SceneIoError::Gltf { .. }));
     let m = e.to_string();
     assert!(m.contains("accessor 2") && m.contains("does not match"), "{m}");
 }
@@ -216,7 +217,7 @@ fn garbage_and_missing_files_are_errors_not_panics() {
         let p = dir.path().join(name);
         std::fs::write(&p, bytes).unwrap();
         let e = load_gltf(&p, None).unwrap_err();
-        assert!(matches!(e, CoreError::Gltf { .. }), "{name}: {e}");
+        assert!(matches!(e, SceneIoError::Gltf { .. }), "{name}: {e}");
     }
     let p = dir.path().join("d.gltf");
     assert!(load_gltf(&p, None).unwrap_err().to_string().contains("KHR_draco_mesh_compression"));

@@ -5,8 +5,8 @@
 #![cfg(all(feature = "mitsuba", feature = "gltf", feature = "toml", feature = "exr"))]
 
 use std::path::Path;
-use vpl_core::CoreError;
 use vpl_scene_io::LoadOptions;
+use vpl_scene_io::SceneIoError;
 use vpl_scene_io::gltf::{load_gltf, load_gltf_in};
 use vpl_scene_io::mitsuba::load_mitsuba;
 use vpl_scene_io::sandbox::Sandbox;
@@ -298,7 +298,7 @@ fn a_scene_file_names_only_files_in_its_folder() {
     std::fs::write(&toml, "[geometry]\ngltf = \"../m.gltf\"\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = [1, 1, 1]\n")
         .unwrap();
     let e = vpl_scene_io::load(toml.to_str().unwrap()).unwrap_err();
-    assert!(matches!(e, CoreError::OutsideScene { .. }), "{e}");
+    assert!(matches!(e, SceneIoError::OutsideScene { .. }), "{e}");
     assert!(vpl_scene_io::load_with(toml.to_str().unwrap(), &LoadOptions::allowing(dir.path())).is_ok());
     // The model named directly loads from wherever it is.
     let setup = vpl_scene_io::load(model.to_str().unwrap());

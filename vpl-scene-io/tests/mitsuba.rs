@@ -3,10 +3,10 @@
 #![cfg(all(feature = "mitsuba", feature = "toml"))]
 
 use std::path::{Path, PathBuf};
-use vpl_core::CoreError;
 use vpl_core::camera::FovAxis;
 use vpl_core::glam::Vec3;
 use vpl_core::scene_file::LightSpec;
+use vpl_scene_io::SceneIoError;
 use vpl_scene_io::mitsuba::{MitsubaData, load_mitsuba};
 
 fn data(p: &str) -> PathBuf {
@@ -154,7 +154,7 @@ fn samples_load_as_scenes() {
 }
 
 /// Writes `body` inside a `<scene>` to a file in `dir` and loads it.
-fn try_scene(dir: &Path, name: &str, body: &str) -> Result<MitsubaData, CoreError> {
+fn try_scene(dir: &Path, name: &str, body: &str) -> Result<MitsubaData, SceneIoError> {
     let p = dir.join(name);
     std::fs::write(&p, format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n")).unwrap();
     load_mitsuba(&p, &[])
@@ -279,7 +279,7 @@ fn a_scene_file_references_a_mitsuba_scene_with_parameters() {
     std::fs::write(&toml, format!("[geometry]\nmitsuba = \"{}\"\n[geometry.mitsuba_params]\nres = \"32\"\n", xml.display())).unwrap();
     // The XML lies outside the scene file's folder: refused unless allowed.
     let e = vpl_scene_io::load(toml.to_str().unwrap()).unwrap_err();
-    assert!(matches!(e, vpl_core::CoreError::OutsideScene { .. }), "{e}");
+    assert!(matches!(e, SceneIoError::OutsideScene { .. }), "{e}");
     let allow = vpl_scene_io::LoadOptions::allowing(xml.parent().unwrap());
     let s = vpl_scene_io::load_with(toml.to_str().unwrap(), &allow).unwrap();
     assert_eq!(s.camera.resolution, (32, 32));

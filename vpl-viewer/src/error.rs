@@ -5,9 +5,13 @@ use std::path::PathBuf;
 /// Why the viewer could not start or stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ViewerError {
-    /// The scene could not be loaded.
+    /// The scene, or an image the session reads, could not be loaded.
     #[error(transparent)]
-    Scene(#[from] vpl_core::CoreError),
+    Scene(#[from] vpl_scene_io::SceneIoError),
+    /// A scene, camera or image value the core refused, or a file it could
+    /// not write.
+    #[error(transparent)]
+    Core(#[from] vpl_core::CoreError),
     /// A sampler name the registry does not hold.
     #[error("unknown sampler `{name}` (the registry holds {known})")]
     UnknownSampler {

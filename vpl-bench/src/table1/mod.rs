@@ -36,6 +36,9 @@ pub enum Table1Error {
     /// A scene, file or image problem.
     #[error(transparent)]
     Core(#[from] CoreError),
+    /// A scene file could not be read.
+    #[error(transparent)]
+    SceneIo(#[from] vpl_scene_io::SceneIoError),
     /// A setting is invalid.
     #[error("{0}")]
     Invalid(String),
@@ -205,7 +208,7 @@ impl Table1Spec {
     fn with_frames(
         profile: &str,
         truth_spp: u32,
-        frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, CoreError>,
+        frames: impl Fn(&Row) -> Result<std::ops::Range<u32>, vpl_scene_io::SceneIoError>,
     ) -> Result<Self, Table1Error> {
         // Rows on real geometry whose models are not here are left out
         // ([`skipped_rows`] says which and why; the report lists them).

@@ -7,6 +7,7 @@
 use std::ops::Range;
 use vpl_core::scene_file::LightKeySpec;
 use vpl_core::{CoreError, SceneSetup};
+use vpl_scene_io::SceneIoError;
 
 /// A tracked pixel: a fixed position in the image (as a fraction of its
 /// width and height, so any image size maps it to the same place) and what
@@ -272,11 +273,11 @@ impl Row {
 
     /// The scene with this row's animation: the built-in one (with the sun
     /// keys of a moving-sun row added) or the row's scene file.
-    pub fn setup(&self) -> Result<SceneSetup, CoreError> {
+    pub fn setup(&self) -> Result<SceneSetup, SceneIoError> {
         if let Some(file) = self.file {
             let path = crate::scenes::locate(file).map_err(|why| CoreError::Invalid(format!("sequence {}: {why}", self.id)))?;
             if let Some(why) = crate::scenes::model_missing(&path) {
-                return Err(CoreError::Invalid(format!("sequence {}: {why}", self.id)));
+                return Err(CoreError::Invalid(format!("sequence {}: {why}", self.id)).into());
             }
             return vpl_scene_io::load(&path.to_string_lossy());
         }
@@ -286,11 +287,11 @@ impl Row {
         }
         let mut spec = setup.description.sequence.clone().ok_or_else(|| CoreError::Invalid(format!("{} has no sequence", self.scene)))?;
         spec.lights = self.sun_keys.iter().map(|&(t, d)| LightKeySpec { light: 0, t, position: None, direction: Some(d) }).collect();
-        setup.with_sequence(spec)
+        Ok(setup.with_sequence(spec)?)
     }
 
     /// Frames in this row's sequence.
-    pub fn frame_count(&self) -> Result<u32, CoreError> {
+    pub fn frame_count(&self) -> Result<u32, SceneIoError> {
         Ok(self.setup()?.sequence.as_ref().map_or(1, |s| s.frame_count()))
     }
 

@@ -18,8 +18,8 @@
 
 use super::xml::{Object, Value};
 use super::{Ctx, TexParam};
+use crate::error::Result;
 use glam::Vec3;
-use vpl_core::error::Result;
 use vpl_core::material::{Layered, Material};
 use vpl_core::spectral::SpectrumKind;
 

@@ -48,12 +48,12 @@ mod xml;
 
 pub use bsdf::{CONDUCTORS, IOR_NAMES, conductor_f0, kappa_from_alpha};
 
+use crate::error::Result;
 use crate::sandbox::Sandbox;
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 use vpl_core::camera::FovAxis;
-use vpl_core::error::Result;
 use vpl_core::material::Material;
 use vpl_core::mesh::Mesh;
 use vpl_core::scene_file::{CameraSpec, LightSpec};

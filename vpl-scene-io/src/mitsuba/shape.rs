@@ -4,8 +4,8 @@
 
 use super::Ctx;
 use super::xml::Object;
+use crate::error::Result;
 use glam::{Mat3, Mat4, Vec3};
-use vpl_core::error::Result;
 use vpl_core::mesh::{Mesh, TriangleDesc};
 
 /// Rings and segments of a tessellated sphere (its area is 0.2 % under

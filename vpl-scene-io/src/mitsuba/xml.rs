@@ -3,13 +3,13 @@
 //! substitution applied, every value parsed where it stands so that an
 //! error names its file and line.
 
+use crate::error::{Result, SceneIoError};
 use crate::input::{MAX_TEXT_BYTES, read_text};
 use crate::sandbox::Sandbox;
 use glam::{Mat4, Vec3};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use vpl_core::error::{CoreError, Result};
 use vpl_core::spectral::{SpectrumKind, spectrum_to_rgb};
 
 /// How deep `<include>`s and objects may nest.
@@ -48,7 +48,7 @@ pub(crate) struct Document {
 
 impl Document {
     /// The error for something at `at`.
-    pub fn err(&self, at: Loc, reason: impl Into<String>) -> CoreError {
+    pub fn err(&self, at: Loc, reason: impl Into<String>) -> SceneIoError {
         mitsuba_err(&self.files[at.file], at.line, reason.into())
     }
 
@@ -72,17 +72,17 @@ fn find_file(sandbox: &Sandbox, dirs: &[PathBuf], name: &str) -> std::result::Re
     for dir in dirs {
         match sandbox.resolve(dir, name) {
             Ok(p) => return Ok(p),
-            Err(CoreError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => continue,
-            Err(e @ CoreError::OutsideScene { .. }) => return Err(e.to_string()),
-            Err(CoreError::Read { source, .. }) => return Err(format!("'{name}': {source}")),
+            Err(SceneIoError::Read { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e @ SceneIoError::OutsideScene { .. }) => return Err(e.to_string()),
+            Err(SceneIoError::Read { source, .. }) => return Err(format!("'{name}': {source}")),
             Err(e) => return Err(format!("'{name}': {e}")),
         }
     }
     Err(format!("'{name}': no such file"))
 }
 
-pub(crate) fn mitsuba_err(path: &Path, line: u32, reason: String) -> CoreError {
-    CoreError::Mitsuba { path: path.into(), line: line as usize, reason }
+pub(crate) fn mitsuba_err(path: &Path, line: u32, reason: String) -> SceneIoError {
+    SceneIoError::Mitsuba { path: path.into(), line: line as usize, reason }
 }
 
 fn parent_dir(p: &Path) -> PathBuf {

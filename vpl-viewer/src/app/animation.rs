@@ -19,8 +19,8 @@ impl State {
     /// Advances the animation and the keyboard flight by the time since the last tick.
     pub(super) fn tick(&mut self, ctx: &egui::Context) {
         let now = Instant::now();
-        let dt = (now - self.last_tick).as_secs_f32().min(0.1);
-        self.last_tick = now;
+        let dt = (now - self.report.last_tick).as_secs_f32().min(0.1);
+        self.report.last_tick = now;
         if self.rec.recording.is_some() {
             let pose = self.pose();
             if let Some((start, r)) = &mut self.rec.recording {
@@ -28,7 +28,7 @@ impl State {
             }
         }
         if self.anim.playing
-            && let Some(seq) = &self.setup.sequence
+            && let Some(seq) = &self.world.setup.sequence
         {
             self.anim.play_clock += dt as f64;
             let f = ((self.anim.play_clock * seq.fps as f64) as u64 % self.anim.frame_count as u64) as u32;
@@ -44,11 +44,11 @@ impl State {
             (k(egui::Key::W) - k(egui::Key::S), k(egui::Key::D) - k(egui::Key::A), k(egui::Key::E) - k(egui::Key::Q), i.modifiers.shift)
         });
         if f != 0.0 || r != 0.0 || u != 0.0 {
-            let step = self.speed * dt * if fast { 4.0 } else { 1.0 };
+            let step = self.world.speed * dt * if fast { 4.0 } else { 1.0 };
             f *= step;
             r *= step;
             u *= step;
-            self.cam.fly(f, r, u);
+            self.world.cam.fly(f, r, u);
             self.changed(false);
         }
     }
@@ -56,9 +56,9 @@ impl State {
     pub(super) fn set_anim_frame(&mut self, f: u32) {
         self.anim.anim_frame = f.min(self.anim.frame_count - 1);
         if self.anim.follow_camera
-            && let Ok(c) = self.setup.camera_at_frame(self.anim.anim_frame)
+            && let Ok(c) = self.world.setup.camera_at_frame(self.anim.anim_frame)
         {
-            self.cam = FlyCamera::from_camera(&c);
+            self.world.cam = FlyCamera::from_camera(&c);
         }
         self.changed(false);
     }
@@ -77,20 +77,20 @@ impl State {
     pub(super) fn move_light(&mut self, dx: f32, dy: f32) {
         let view_w = self.view_pixels().0.max(1.0);
         let lights = self.anim.manual_lights.get_or_insert_with(|| {
-            self.anim.scene_cache.as_ref().map_or_else(|| self.setup.scene.extra_lights(), |(_, s)| s.extra_lights())
+            self.anim.scene_cache.as_ref().map_or_else(|| self.world.setup.scene.extra_lights(), |(_, s)| s.extra_lights())
         });
-        let right = self.cam.right();
-        let up = right.cross(self.cam.forward).normalize_or(Vec3::Y);
-        let fov = self.setup.camera.fov_deg.to_radians();
+        let right = self.world.cam.right();
+        let up = right.cross(self.world.cam.forward).normalize_or(Vec3::Y);
+        let fov = self.world.setup.camera.fov_deg.to_radians();
         let moved = lights.iter_mut().find_map(|l| match l {
             Light::Point { position, .. } | Light::Spot { position, .. } => {
-                let dist = (*position - self.cam.origin).dot(self.cam.forward).abs().max(1e-3);
+                let dist = (*position - self.world.cam.origin).dot(self.world.cam.forward).abs().max(1e-3);
                 let per_px = 2.0 * dist * (0.5 * fov).tan() / view_w;
                 *position += (right * dx - up * dy) * per_px;
                 Some(())
             }
             Light::Directional { direction, .. } => {
-                let turn = vpl_core::glam::Quat::from_axis_angle(self.cam.up, -dx * 0.005)
+                let turn = vpl_core::glam::Quat::from_axis_angle(self.world.cam.up, -dx * 0.005)
                     * vpl_core::glam::Quat::from_axis_angle(right, -dy * 0.005);
                 *direction = (turn * *direction).normalize_or(*direction);
                 Some(())
@@ -101,7 +101,7 @@ impl State {
             self.anim.lights_version += 1;
             self.changed(false);
         } else {
-            self.status_line = Some("the scene has no point, spot or directional light to move".into());
+            self.report.status_line = Some("the scene has no point, spot or directional light to move".into());
         }
     }
 }

@@ -38,7 +38,7 @@ impl State {
         {
             return Ok(s.clone());
         }
-        let (mut scene, _) = self.setup.frame(self.anim.anim_frame)?;
+        let (mut scene, _) = self.world.setup.frame(self.anim.anim_frame)?;
         if let Some(l) = &self.anim.manual_lights {
             scene = scene.with_lights(l.clone())?;
         }
@@ -55,23 +55,23 @@ impl State {
         let scene = match self.scene() {
             Ok(s) => s,
             Err(e) => {
-                self.error_line = Some(e.to_string());
+                self.report.error_line = Some(e.to_string());
                 self.link.stalled = true;
                 return;
             }
         };
-        let camera = match self.cam.camera(&self.setup.camera, self.resolution()) {
+        let camera = match self.world.cam.camera(&self.world.setup.camera, self.resolution()) {
             Ok(c) => c,
             Err(e) => {
-                self.error_line = Some(format!("camera: {e}"));
+                self.report.error_line = Some(format!("camera: {e}"));
                 self.link.stalled = true;
                 return;
             }
         };
-        let time = self.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim.anim_frame));
+        let time = self.world.setup.sequence.as_ref().map_or(0.0, |s| s.time(self.anim.anim_frame));
         let cancel = Arc::new(AtomicBool::new(false));
         let reference = self.inspect.reference_on.then_some(ReferenceSpec {
-            mode: self.mode,
+            mode: self.shown.mode,
             max_depth: vpl_core::Budget::default().max_depth,
             budget: REFERENCE_BUDGET,
         });
@@ -99,9 +99,9 @@ impl State {
             match reply {
                 Reply::Frame { sides, reference } => {
                     let now = Instant::now();
-                    self.first_frame_at.get_or_insert(now);
-                    self.last_frame_at = Some(now);
-                    self.frames_shown += 1;
+                    self.report.first_frame_at.get_or_insert(now);
+                    self.report.last_frame_at = Some(now);
+                    self.report.frames_shown += 1;
                     if generation == self.link.generation {
                         self.session.waiting = self.session.waiting.saturating_sub(1);
                     }
@@ -109,13 +109,13 @@ impl State {
                         h.push(s);
                     }
                     self.picture.last = sides;
-                    self.error_line = None;
+                    self.report.error_line = None;
                     self.picture.recompose = true;
                     match reference {
                         Some(Ok(r)) => self.inspect.reference = Some(r),
                         Some(Err(e)) => {
                             self.inspect.reference = None;
-                            self.error_line = Some(e);
+                            self.report.error_line = Some(e);
                         }
                         None => self.inspect.reference = None,
                     }
@@ -126,7 +126,7 @@ impl State {
                     if self.session.scripted {
                         self.fail(ViewerError::Render(e.clone()));
                     }
-                    self.error_line = Some(e);
+                    self.report.error_line = Some(e);
                     if generation == self.link.generation {
                         self.link.stalled = true;
                     }
@@ -155,9 +155,9 @@ impl State {
     /// How the view is drawn now.
     pub(super) fn look(&self) -> Look<'_> {
         Look {
-            channel: self.channel,
-            overlay: self.overlay,
-            exposure: self.exposure,
+            channel: self.shown.channel,
+            overlay: self.shown.overlay,
+            exposure: self.shown.exposure,
             reference: self.inspect.reference.as_ref().map(|r| &r.image),
             picked: self.pick(),
         }
@@ -177,7 +177,7 @@ impl State {
                 self.picture.device_frames += 1;
             }
             Ok(None) => {}
-            Err(e) => self.error_line = Some(format!("view on the device: {e}")),
+            Err(e) => self.report.error_line = Some(format!("view on the device: {e}")),
         }
     }
 

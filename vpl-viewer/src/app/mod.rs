@@ -116,7 +116,7 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
         .map_err(|e| ViewerError::Render(format!("cannot start the render thread: {e}")))?;
     let scale = options.scale.unwrap_or(default_scale);
     let mut app = App { gfx: None, shared, st: State::new(options, registry, setup, renderer_line, scale, jobs, replies) };
-    app.st.scene_dir = scene_dir(&app.st.scene_spec);
+    app.st.world.scene_dir = scene_dir(&app.st.world.scene_spec);
     let looped = event_loop.run_app(&mut app).map_err(|e| ViewerError::NoDisplay(crate::display::reason(&e)));
     let App { st, gfx, .. } = app;
     drop(gfx);
@@ -124,7 +124,7 @@ pub(crate) fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary
         cancel.store(true, Ordering::Relaxed);
     }
     let summary = st.summary();
-    let fatal = st.fatal;
+    let fatal = st.report.fatal;
     drop(st.link.jobs);
     let _ = worker.join();
     looped?;
@@ -212,9 +212,8 @@ type SharedGpu = std::convert::Infallible;
 /// What a shadow map was rendered for: side, slot, the VPL's position and normal.
 type MapKey = (usize, usize, [f32; 6]);
 
-/// Everything but the window.
-struct State {
-    // The scene, the camera and the window.
+/// The scene, the camera flying through it, and the window.
+struct World {
     scene_name: String,
     scene_spec: String,
     scene_dir: PathBuf,
@@ -223,9 +222,12 @@ struct State {
     setup: SceneSetup,
     cam: FlyCamera,
     speed: f32,
-    renderer_line: String,
     window_size: (u32, u32),
-    // What the frames are rendered with, and how they are shown.
+}
+
+/// What the frames are rendered with (the sides' samplers, the budget, the
+/// light paths, the render scale), and how they are shown.
+struct Shown {
     sides: [String; 2],
     split: bool,
     vpls: usize,
@@ -234,7 +236,11 @@ struct State {
     channel: Channel,
     overlay: Overlay,
     exposure: f32,
-    // What the panel reports, and what the session did.
+}
+
+/// What the panel reports, and what the session did.
+struct Report {
+    renderer_line: String,
     error_line: Option<String>,
     status_line: Option<String>,
     frames_shown: u64,
@@ -242,6 +248,16 @@ struct State {
     last_frame_at: Option<Instant>,
     last_tick: Instant,
     fatal: Option<ViewerError>,
+}
+
+/// Everything but the window.
+struct State {
+    /// The scene, the camera flying through it, and the window.
+    world: World,
+    /// What the frames are rendered with, and how they are shown.
+    shown: Shown,
+    /// What the panel reports, and what the session did.
+    report: Report,
     /// The animation: the sequence's frames, playing them, and lights moved by hand.
     anim: Animation,
     /// The render thread: the jobs sent to it, its replies, and the frame in flight.
@@ -271,31 +287,37 @@ impl State {
         let right = o.split.clone().unwrap_or_else(|| if o.pipeline.sampler == "smc" { "ir".into() } else { "smc".into() });
         let scripted = o.script.is_some();
         State {
-            scene_name: setup.scene.name.clone(),
-            scene_spec: o.scene.clone(),
-            scene_dir: PathBuf::from("."),
-            seed: o.pipeline.seed,
-            names: registry.names().into_iter().map(str::to_string).collect(),
-            cam: FlyCamera::from_camera(&setup.camera),
-            speed: setup.scene.radius().max(1e-3) * 0.5,
-            setup,
-            renderer_line,
-            window_size: o.window,
-            sides: [o.pipeline.sampler, right],
-            split,
-            vpls: o.pipeline.budget.vpls,
-            mode: o.pipeline.mode,
-            scale,
-            channel: Channel::Image,
-            overlay: Overlay::Off,
-            exposure: o.exposure,
-            error_line: None,
-            status_line: None,
-            frames_shown: 0,
-            first_frame_at: None,
-            last_frame_at: None,
-            last_tick: Instant::now(),
-            fatal: None,
+            world: World {
+                scene_name: setup.scene.name.clone(),
+                scene_spec: o.scene.clone(),
+                scene_dir: PathBuf::from("."),
+                seed: o.pipeline.seed,
+                names: registry.names().into_iter().map(str::to_string).collect(),
+                cam: FlyCamera::from_camera(&setup.camera),
+                speed: setup.scene.radius().max(1e-3) * 0.5,
+                setup,
+                window_size: o.window,
+            },
+            shown: Shown {
+                sides: [o.pipeline.sampler, right],
+                split,
+                vpls: o.pipeline.budget.vpls,
+                mode: o.pipeline.mode,
+                scale,
+                channel: Channel::Image,
+                overlay: Overlay::Off,
+                exposure: o.exposure,
+            },
+            report: Report {
+                renderer_line,
+                error_line: None,
+                status_line: None,
+                frames_shown: 0,
+                first_frame_at: None,
+                last_frame_at: None,
+                last_tick: Instant::now(),
+                fatal: None,
+            },
             anim: Animation {
                 frame_count,
                 anim_frame: 0,
@@ -333,22 +355,22 @@ impl State {
     }
 
     fn summary(&self) -> Summary {
-        let fps = match (self.first_frame_at, self.last_frame_at) {
-            (Some(a), Some(b)) if self.frames_shown > 1 && b > a => (self.frames_shown - 1) as f64 / (b - a).as_secs_f64(),
+        let fps = match (self.report.first_frame_at, self.report.last_frame_at) {
+            (Some(a), Some(b)) if self.report.frames_shown > 1 && b > a => (self.report.frames_shown - 1) as f64 / (b - a).as_secs_f64(),
             _ => 0.0,
         };
         Summary {
-            frames: self.frames_shown,
+            frames: self.report.frames_shown,
             fps,
-            renderer: self.renderer_line.clone(),
+            renderer: self.report.renderer_line.clone(),
             resolution: self.resolution(),
             device_frames: self.picture.device_frames,
         }
     }
 
     fn fail(&mut self, e: ViewerError) {
-        if self.fatal.is_none() {
-            self.fatal = Some(e);
+        if self.report.fatal.is_none() {
+            self.report.fatal = Some(e);
         }
         self.session.quit = true;
     }
@@ -358,19 +380,24 @@ impl State {
     fn view_pixels(&self) -> (f32, f32) {
         match self.picture.view_rect {
             Some(r) => (r.width() * self.picture.pixels_per_point, r.height() * self.picture.pixels_per_point),
-            None => ((self.window_size.0 as f32 - PANEL_WIDTH * self.picture.pixels_per_point).max(64.0), self.window_size.1 as f32),
+            None => {
+                ((self.world.window_size.0 as f32 - PANEL_WIDTH * self.picture.pixels_per_point).max(64.0), self.world.window_size.1 as f32)
+            }
         }
     }
 
     fn resolution(&self) -> (u32, u32) {
         let (w, h) = self.view_pixels();
-        (((w * self.scale).round() as u32).max(16), ((h * self.scale).round() as u32).max(16))
+        (((w * self.shown.scale).round() as u32).max(16), ((h * self.shown.scale).round() as u32).max(16))
     }
 
     fn specs(&self) -> Vec<SideSpec> {
-        let n = if self.split { 2 } else { 1 };
+        let n = if self.shown.split { 2 } else { 1 };
         let resolution = self.resolution();
-        self.sides[..n].iter().map(|s| SideSpec { sampler: s.clone(), vpls: self.vpls, mode: self.mode, resolution }).collect()
+        self.shown.sides[..n]
+            .iter()
+            .map(|s| SideSpec { sampler: s.clone(), vpls: self.shown.vpls, mode: self.shown.mode, resolution })
+            .collect()
     }
 
     /// What the frames are rendered from changed. `hard`: what a side
@@ -443,12 +470,12 @@ impl App {
             && let Some(path) = st.session.pending_shot.take()
         {
             match gfx.capture(&prims, &sd).map_err(ViewerError::Surface).and_then(|px| st.write_shot(&path, px)) {
-                Ok(p) => st.status_line = Some(format!("wrote {}", p.display())),
+                Ok(p) => st.report.status_line = Some(format!("wrote {}", p.display())),
                 Err(e) if st.session.scripted => {
                     st.fail(e);
                     el.exit();
                 }
-                Err(e) => st.error_line = Some(e.to_string()),
+                Err(e) => st.report.error_line = Some(e.to_string()),
             }
             gfx.window.request_redraw();
         }
@@ -472,7 +499,7 @@ impl ApplicationHandler<Wake> for App {
         if self.gfx.is_some() {
             return;
         }
-        match Gfx::new(el, self.st.window_size, &format!("vpl view: {}", self.st.scene_name), self.shared.as_ref()) {
+        match Gfx::new(el, self.st.world.window_size, &format!("vpl view: {}", self.st.world.scene_name), self.shared.as_ref()) {
             Ok(g) => {
                 #[cfg(feature = "gpu")]
                 {
@@ -504,7 +531,7 @@ impl ApplicationHandler<Wake> for App {
             }
             WindowEvent::Resized(s) => {
                 gfx.resize(s.width, s.height);
-                self.st.window_size = (s.width, s.height);
+                self.st.world.window_size = (s.width, s.height);
                 gfx.window.request_redraw();
             }
             WindowEvent::RedrawRequested => self.redraw(el),

@@ -21,61 +21,61 @@ impl State {
     }
 
     pub(super) fn panel(&mut self, ui: &mut egui::Ui) {
-        ui.heading(format!("vpl view: {}", self.scene_name));
-        ui.label(&self.renderer_line);
+        ui.heading(format!("vpl view: {}", self.world.scene_name));
+        ui.label(&self.report.renderer_line);
         let res = self.resolution();
-        ui.label(format!("render {}×{} (scale {:.2} of the view)", res.0, res.1, self.scale));
+        ui.label(format!("render {}×{} (scale {:.2} of the view)", res.0, res.1, self.shown.scale));
         ui.separator();
         ui.horizontal(|ui| {
             ui.label("light");
             for (m, name) in [(Mode::Full, "full"), (Mode::Direct, "direct"), (Mode::Indirect, "indirect")] {
-                if ui.selectable_label(self.mode == m, name).clicked() && self.mode != m {
-                    self.mode = m;
+                if ui.selectable_label(self.shown.mode == m, name).clicked() && self.shown.mode != m {
+                    self.shown.mode = m;
                     self.changed(true);
                 }
             }
         });
         ui.horizontal(|ui| {
-            let mut v = self.vpls;
+            let mut v = self.shown.vpls;
             ui.label("VPLs");
             ui.add(egui::DragValue::new(&mut v).range(1..=65536));
-            if v != self.vpls {
-                self.vpls = v;
+            if v != self.shown.vpls {
+                self.shown.vpls = v;
                 self.changed(true);
             }
-            let mut s = self.scale;
+            let mut s = self.shown.scale;
             ui.label("scale");
             ui.add(egui::DragValue::new(&mut s).range(0.05..=1.0).speed(0.01));
-            if s != self.scale {
-                self.scale = s;
+            if s != self.shown.scale {
+                self.shown.scale = s;
                 self.changed(true);
             }
         });
         ui.horizontal(|ui| {
-            ui.label(if self.split { "left" } else { "sampler" });
-            if Self::sampler_combo(ui, "left", &self.names, &mut self.sides[0]) {
+            ui.label(if self.shown.split { "left" } else { "sampler" });
+            if Self::sampler_combo(ui, "left", &self.world.names, &mut self.shown.sides[0]) {
                 self.changed(true);
             }
         });
         ui.horizontal(|ui| {
-            if ui.checkbox(&mut self.split, "split, right").changed() {
+            if ui.checkbox(&mut self.shown.split, "split, right").changed() {
                 self.changed(true);
             }
-            if self.split && Self::sampler_combo(ui, "right", &self.names, &mut self.sides[1]) {
+            if self.shown.split && Self::sampler_combo(ui, "right", &self.world.names, &mut self.shown.sides[1]) {
                 self.changed(true);
             }
         });
         ui.horizontal(|ui| {
             ui.label("overlay");
             for (o, name) in [(Overlay::Off, "off"), (Overlay::Vpls, "VPLs"), (Overlay::Interleave, "interleaving")] {
-                if ui.selectable_label(self.overlay == o, name).clicked() {
-                    self.overlay = o;
+                if ui.selectable_label(self.shown.overlay == o, name).clicked() {
+                    self.shown.overlay = o;
                     self.picture.recompose = true;
                 }
             }
         });
         ui.label(
-            egui::RichText::new(match self.overlay {
+            egui::RichText::new(match self.shown.overlay {
                 Overlay::Off => "click a VPL (VPL overlay) to see its shadow map".to_string(),
                 Overlay::Vpls => "colour: flux against the median (blue ¹⁄₁₀₀×, red 100×); white ring: moved this frame".into(),
                 Overlay::Interleave => "pixel class 4·(y mod 4) + (x mod 4) shades with VPL subset c; a picked VPL lights its class".into(),
@@ -125,16 +125,16 @@ impl State {
         }
         ui.horizontal(|ui| {
             ui.label("show");
-            let before = self.channel;
-            egui::ComboBox::from_id_salt("channel").selected_text(self.channel.name()).show_ui(ui, |ui| {
+            let before = self.shown.channel;
+            egui::ComboBox::from_id_salt("channel").selected_text(self.shown.channel.name()).show_ui(ui, |ui| {
                 for c in Channel::ALL {
-                    ui.selectable_value(&mut self.channel, c, c.name());
+                    ui.selectable_value(&mut self.shown.channel, c, c.name());
                 }
             });
             ui.label("exposure");
-            let e = self.exposure;
-            ui.add(egui::DragValue::new(&mut self.exposure).range(0.01..=100.0).speed(0.05));
-            if self.channel != before || self.exposure != e {
+            let e = self.shown.exposure;
+            ui.add(egui::DragValue::new(&mut self.shown.exposure).range(0.01..=100.0).speed(0.05));
+            if self.shown.channel != before || self.shown.exposure != e {
                 self.picture.recompose = true;
             }
         });
@@ -142,7 +142,7 @@ impl State {
             ui.horizontal(|ui| {
                 if ui.button(if self.anim.playing { "pause" } else { "play" }).clicked() {
                     self.anim.playing = !self.anim.playing;
-                    if let Some(seq) = &self.setup.sequence {
+                    if let Some(seq) = &self.world.setup.sequence {
                         self.anim.play_clock = self.anim.anim_frame as f64 / seq.fps as f64;
                     }
                 }
@@ -203,7 +203,7 @@ impl State {
         ui.horizontal(|ui| {
             if ui.button("screenshot (PNG, EXR)").clicked() {
                 self.session.shots += 1;
-                self.session.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.scene_name, self.session.shots)));
+                self.session.pending_shot = Some(PathBuf::from(format!("vpl-view-{}-{}", self.world.scene_name, self.session.shots)));
             }
             if self.rec.recording.is_none() {
                 if ui.button("record path").clicked() {
@@ -211,9 +211,9 @@ impl State {
                 }
             } else if ui.button("stop, write scene file").clicked() {
                 self.rec.recordings += 1;
-                let path = PathBuf::from(format!("vpl-view-{}-path-{}.toml", self.scene_name, self.rec.recordings));
+                let path = PathBuf::from(format!("vpl-view-{}-path-{}.toml", self.world.scene_name, self.rec.recordings));
                 if let Err(e) = self.record_stop(&path) {
-                    self.error_line = Some(e.to_string());
+                    self.report.error_line = Some(e.to_string());
                 }
             }
         });
@@ -223,10 +223,10 @@ impl State {
         ui.label(
             egui::RichText::new("left drag: orbit · right drag: look · WASD QE: fly · wheel: dolly · Ctrl+drag: move the light").small(),
         );
-        if let Some(s) = &self.status_line {
+        if let Some(s) = &self.report.status_line {
             ui.label(egui::RichText::new(s).small());
         }
-        if let Some(e) = &self.error_line {
+        if let Some(e) = &self.report.error_line {
             ui.colored_label(egui::Color32::from_rgb(255, 90, 90), e);
         }
     }
@@ -261,10 +261,10 @@ impl State {
             if response.dragged_by(egui::PointerButton::Primary) && ctrl {
                 self.move_light(d.x, d.y);
             } else if response.dragged_by(egui::PointerButton::Primary) {
-                self.cam.orbit(-d.x * 0.005, -d.y * 0.005);
+                self.world.cam.orbit(-d.x * 0.005, -d.y * 0.005);
                 self.changed(false);
             } else if response.dragged_by(egui::PointerButton::Secondary) {
-                self.cam.look(-d.x * 0.003, -d.y * 0.003);
+                self.world.cam.look(-d.x * 0.003, -d.y * 0.003);
                 self.changed(false);
             }
         }
@@ -302,7 +302,7 @@ impl State {
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
-                self.cam.dolly(scroll * 0.002);
+                self.world.cam.dolly(scroll * 0.002);
                 self.changed(false);
             }
         }

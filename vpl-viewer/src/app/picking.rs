@@ -18,7 +18,7 @@ impl State {
         let (side, slot) = self.inspect.picked?;
         let s = self.picture.last.get(side)?;
         // The viewer's renderers shade interleaved (vpl_render's default).
-        Some(Pick { side, slot, class: inspect::interleave_class(slot, s.out.vpls.len(), self.seed) })
+        Some(Pick { side, slot, class: inspect::interleave_class(slot, s.out.vpls.len(), self.world.seed) })
     }
 
     /// Picks the visible VPL nearest to render pixel `(x, y)` (of the side
@@ -33,7 +33,7 @@ impl State {
         let hosted = self.on_host();
         self.inspect.picked =
             hosted.get(k).and_then(|(s, g)| pick_vpl(SideFrame { gbuffer: g, ..side(s) }, x, y, radius)).map(|slot| (k, slot));
-        self.status_line = Some(match self.inspect.picked {
+        self.report.status_line = Some(match self.inspect.picked {
             Some((k, slot)) => format!("picked VPL {slot} of {}", self.picture.last[k].spec.sampler),
             None => "no VPL near the click".into(),
         });
@@ -58,7 +58,7 @@ impl State {
         let scene = match self.scene() {
             Ok(s) => s,
             Err(e) => {
-                self.error_line = Some(e.to_string());
+                self.report.error_line = Some(e.to_string());
                 return;
             }
         };
@@ -69,7 +69,7 @@ impl State {
                 self.inspect.map_texture = None;
             }
             Ok(None) => self.inspect.map = None,
-            Err(e) => self.error_line = Some(format!("shadow map: {e}")),
+            Err(e) => self.report.error_line = Some(format!("shadow map: {e}")),
         }
     }
 

@@ -16,7 +16,7 @@ pub(super) struct Session {
 impl State {
     /// Runs the script's steps up to the next wait (after the first frame).
     pub(super) fn advance_script(&mut self) {
-        if !self.session.scripted || self.frames_shown == 0 || self.session.pending_shot.is_some() || self.session.quit {
+        if !self.session.scripted || self.report.frames_shown == 0 || self.session.pending_shot.is_some() || self.session.quit {
             return;
         }
         while self.session.waiting == 0 {
@@ -30,7 +30,7 @@ impl State {
                     if !self.check_sampler(&name) {
                         return;
                     }
-                    self.sides[0] = name;
+                    self.shown.sides[0] = name;
                     self.changed(true);
                 }
                 Step::Split(name) => {
@@ -38,31 +38,31 @@ impl State {
                         if !self.check_sampler(&name) {
                             return;
                         }
-                        self.sides[1] = name;
-                        self.split = true;
+                        self.shown.sides[1] = name;
+                        self.shown.split = true;
                     } else {
-                        self.split = false;
+                        self.shown.split = false;
                     }
                     self.changed(true);
                 }
                 Step::Overlay(o) => {
-                    self.overlay = o;
+                    self.shown.overlay = o;
                     self.picture.recompose = true;
                 }
                 Step::Show(c) => {
-                    self.channel = c;
+                    self.shown.channel = c;
                     self.picture.recompose = true;
                 }
                 Step::Mode(m) => {
-                    self.mode = m;
+                    self.shown.mode = m;
                     self.changed(true);
                 }
                 Step::Vpls(n) => {
-                    self.vpls = n;
+                    self.shown.vpls = n;
                     self.changed(true);
                 }
                 Step::Orbit(yaw, pitch) => {
-                    self.cam.orbit(yaw.to_radians(), pitch.to_radians());
+                    self.world.cam.orbit(yaw.to_radians(), pitch.to_radians());
                     self.changed(true);
                 }
                 Step::Reference(on) => self.set_reference(on),
@@ -100,10 +100,10 @@ impl State {
     }
 
     pub(super) fn check_sampler(&mut self, name: &str) -> bool {
-        if self.names.iter().any(|n| n == name) {
+        if self.world.names.iter().any(|n| n == name) {
             return true;
         }
-        self.fail(ViewerError::UnknownSampler { name: name.into(), known: self.names.join(", ") });
+        self.fail(ViewerError::UnknownSampler { name: name.into(), known: self.world.names.join(", ") });
         false
     }
 
@@ -155,9 +155,9 @@ impl State {
             res.1,
             sides.join(", "),
             pipelines.join(", "),
-            self.channel.name(),
-            self.overlay.name(),
-            self.frames_shown,
+            self.shown.channel.name(),
+            self.shown.overlay.name(),
+            self.report.frames_shown,
             self.inspect.reference.as_ref().map_or(0, |r| r.passes),
             self.inspect.picked.map_or("null".to_string(), |(k, slot)| format!("[{k}, {slot}]")),
             self.inspect.map_rect.map_or("null".to_string(), |r| format!(

@@ -330,6 +330,37 @@ impl Bvh {
         }
     }
 
+    /// The scene triangles in the leaves whose boxes overlap the box
+    /// [`lo`, `hi`], each once and in ascending order, into `out` (cleared
+    /// first). A leaf's box bounds all its triangles, so the caller tests
+    /// each triangle itself; none that touches the box is left out.
+    pub fn triangles_in_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
+        out.clear();
+        if self.nodes.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(node) = stack.pop() {
+            let n = &self.nodes[node as usize];
+            for i in 0..WIDTH {
+                // An unused lane's empty box (lo +∞, hi −∞) overlaps nothing.
+                let apart = (0..3).any(|a| n.lo[a][i] > hi[a] || n.hi[a][i] < lo[a]);
+                if apart {
+                    continue;
+                }
+                let child = n.child[i];
+                if child & LEAF != 0 {
+                    let (first, count) = leaf_range(child);
+                    out.extend(self.order[first..first + count].iter().copied());
+                } else {
+                    stack.push(child);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
     /// The vertices of scene triangle `tri` as the BVH tests them (`None`
     /// for a triangle it does not hold).
     pub fn vertices(&self, tri: u32) -> Option<[Vec3; 3]> {
@@ -429,6 +460,36 @@ mod tests {
         let (ls, _) = s.sample_light(o, 0.5, (0.5, 0.5)).unwrap();
         assert!(ls.wi.x.is_sign_negative(), "the test needs −0.0 in the light direction");
         assert!(!s.light_unoccluded(Vec3::new(0.2, 0.0, 0.3), Vec3::Y, &ls));
+    }
+
+    /// Boxes through `office`: the query returns every triangle whose own
+    /// bounding box overlaps the box (testing every triangle), and only
+    /// triangles in leaves that overlap it.
+    #[test]
+    fn a_box_query_finds_every_triangle_that_touches_the_box() {
+        let s = crate::SceneSetup::builtin("office").unwrap().scene;
+        let bvh = &s.geometry.bvh;
+        let (lo, hi) = s.geometry.bounds;
+        let mut rng = crate::rng::stream(3, 0, crate::rng::Purpose::TEST, 0);
+        let mut out = Vec::new();
+        for _ in 0..200 {
+            let c = lo + (hi - lo) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let h = (hi - lo) * 0.05 * rng.next_f32();
+            bvh.triangles_in_box(c - h, c + h, &mut out);
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "ascending, each once");
+            for (t, tri) in s.geometry.triangles.iter().enumerate() {
+                let v = [tri.p0, tri.p0 + tri.e1, tri.p0 + tri.e2];
+                let (tlo, thi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+                let touches = (tlo.cmple(c + h) & thi.cmpge(c - h)).all();
+                if touches && tri.area > 0.0 {
+                    assert!(out.binary_search(&(t as u32)).is_ok(), "triangle {t} touches the box and was left out");
+                }
+            }
+        }
+        bvh.triangles_in_box(Vec3::splat(1e6), Vec3::splat(1e6 + 1.0), &mut out);
+        assert!(out.is_empty());
+        bvh.triangles_in_box(lo, hi, &mut out);
+        assert_eq!(out.len(), s.geometry.triangles.iter().filter(|t| t.area > 0.0).count(), "the scene's box holds them all");
     }
 
     /// Random rays through `office` (its 8-wide tree has several levels):

@@ -1,5 +1,6 @@
 //! Settings of the SMC sampler, with the paper's defaults.
 
+use crate::ball_area::ProbeArea;
 use crate::flux::{AreaProbes, FluxEstimator, ProbeWindow, flux_param};
 use crate::placement::Placement;
 use crate::relight::Relight;
@@ -46,6 +47,8 @@ pub struct SmcConfig {
     pub probes_per_vpl: usize,
     /// How the T iterations of probes are weighted ([`ProbeWindow`]).
     pub probe_window: ProbeWindow,
+    /// What a probe's ball stands for ([`ProbeArea`]).
+    pub probe_area: ProbeArea,
     /// Where in its Voronoi cell a VPL shines from ([`Placement`]).
     pub placement: Placement,
     /// How the cells' mean radiances follow moving lights ([`Relight`]).
@@ -75,6 +78,7 @@ impl Default for SmcConfig {
             probe_iterations: 16,
             probes_per_vpl: 4,
             probe_window: ProbeWindow::default(),
+            probe_area: ProbeArea::default(),
             placement: Placement::default(),
             relight: Relight::default(),
             relight_paths: 1,
@@ -188,6 +192,11 @@ impl SmcConfig {
             about: "candidate hits per VPL and iteration kept as area probes (all of them from the resample ratio up)",
         },
         ParamKey {
+            key: "probe-area",
+            default: "disk",
+            about: "what a probe's ball to its nearest neighbour stands for: disk (π r², exact on a plane), surface (the scene's surface inside the ball, exact at edges and in corners too) or smooth (neighbours and surface on the probe's own smooth surface, within 60°)",
+        },
+        ParamKey {
             key: "probe-window",
             default: "triangle",
             about: "weights of the T iterations of probes: triangle (rising and falling, a cell changes smoothly) or box (all alike)",
@@ -249,6 +258,7 @@ impl SmcConfig {
             probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
             probes_per_vpl: p.count_or("probes-per-vpl", d.probes_per_vpl, 1)?,
             probe_window: p.get_or("probe-window", d.probe_window)?,
+            probe_area: p.get_or("probe-area", d.probe_area)?,
             placement: p.get_or("placement", d.placement)?,
             relight: p.get_or("relight", d.relight)?,
             relight_paths: p.count_or("relight-paths", d.relight_paths, 1)?,

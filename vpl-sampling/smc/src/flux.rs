@@ -158,6 +158,7 @@
 //! still uses the paper's kNN intensities (eq. 6), so the set evolves as
 //! the paper's does.
 
+use crate::ball_area::ProbeArea;
 use crate::points::{first_passing, resolve};
 use rayon::prelude::*;
 use std::collections::{HashSet, VecDeque};
@@ -361,6 +362,9 @@ pub struct ProbeHits<'a> {
     /// One over the draws of the resampling: with a candidate's `draws`,
     /// its Horvitz–Thompson factor.
     pub draw_scale: f64,
+    /// The scene the hits lie in, for [`ProbeArea::Surface`] (without it,
+    /// or under [`ProbeArea::Disk`], each hit stands for its disk).
+    pub scene: Option<&'a Scene>,
 }
 
 /// A Voronoi cell as the probes measured it.
@@ -531,6 +535,8 @@ pub struct AreaProbes {
     pushed: usize,
     /// How the iterations held are weighted ([`ProbeWindow`]).
     window: ProbeWindow,
+    /// What each probe's ball stands for.
+    ball: ProbeArea,
     /// Per iteration held, the luminance of each slot's VPL as the sampler
     /// estimated it under that iteration's lights, by slot (with its id):
     /// what [`Cell::current_radiance`] brings the cells' radiances forward with.
@@ -580,9 +586,16 @@ impl AreaProbes {
             per_iteration: usize::MAX,
             pushed: 0,
             window: ProbeWindow::default(),
+            ball: ProbeArea::default(),
             records: VecDeque::new(),
             tracked: VecDeque::new(),
         }
+    }
+
+    /// Measures each probe's ball by `ball` ([`ProbeArea`]).
+    pub fn with_ball(mut self, ball: ProbeArea) -> AreaProbes {
+        self.ball = ball;
+        self
     }
 
     /// Weighs the iterations held by `window`.
@@ -646,7 +659,7 @@ impl AreaProbes {
     /// radiance only (area 0), so that every candidate still counts in its
     /// cell's mean.
     pub fn push(&mut self, iteration: ProbeHits) {
-        let ProbeHits { hits, normals, shading, tree, nearest, candidates, draw_scale } = iteration;
+        let ProbeHits { hits, normals, shading, tree, nearest, candidates, draw_scale, scene } = iteration;
         let n = hits.len();
         if n < 2 || normals.len() != n || shading.len() != n || nearest.len() != n || tree.len() != n {
             return;
@@ -673,7 +686,22 @@ impl AreaProbes {
         if stride > 1 {
             kept.extend((0..n).filter(|&h| h % stride != offset && radiance[h].is_some()));
         }
-        let r1_sq = surface_neighbour_sq_of(&tree, hits, normals, nearest, &kept);
+        let accept = if self.ball == ProbeArea::Smooth { SAME_SURFACE_COS } else { SAME_SIDE_COS };
+        let mut r1_sq = neighbour_sq_within(&tree, hits, normals, nearest, &kept, accept);
+        // Under ProbeArea::Surface each ball stands for the surface inside
+        // it, A(r_1), written here as the r² of a disk of that area.
+        if let (ProbeArea::Surface | ProbeArea::Smooth, Some(scene)) = (self.ball, scene) {
+            r1_sq = kept
+                .par_iter()
+                .zip(&r1_sq)
+                .map_init(Vec::new, |scratch, (&h, &r2)| {
+                    if !r2.is_finite() {
+                        return r2;
+                    }
+                    crate::ball_area::surface_in_ball(scene, hits[h], normals[h], r2.sqrt(), accept, scratch) / std::f32::consts::PI
+                })
+                .collect();
+        }
         let own_area = std::f32::consts::PI * (n - 1) as f32 / n as f32;
         let scale = own_area * (n as f32 / area_probes as f32);
         let batch: Vec<Probe> = kept
@@ -1268,12 +1296,12 @@ const ASSIGN_CHUNK: usize = 1 << 18;
 
 /// Least cosine between the normals of a probe and the sites it tries
 /// first: the same smooth surface (within 60°).
-const SAME_SURFACE_COS: f32 = 0.5;
+pub(crate) const SAME_SURFACE_COS: f32 = 0.5;
 
 /// Least cosine between the normals of two points on "the same surface".
 /// (above −0.5: within 120°, so a right-angled edge is kept but the back
 /// of a thin wall is not).
-const SAME_SIDE_COS: f32 = -0.5;
+pub(crate) const SAME_SIDE_COS: f32 = -0.5;
 
 /// Squared distance from every point to its nearest other point *on the
 /// same side of the surface*: normals within 120°
@@ -1297,10 +1325,23 @@ fn surface_neighbour_sq_of(
     nearest: &[Option<(usize, f32)>],
     of: &[usize],
 ) -> Vec<f32> {
+    neighbour_sq_within(tree, points, normals, nearest, of, SAME_SIDE_COS)
+}
+
+/// The squared distance from each point of `of` to its nearest other point
+/// whose normal is within `accept` (a cosine) of its own.
+fn neighbour_sq_within(
+    tree: &KnnDensity,
+    points: &[Vec3],
+    normals: &[Vec3],
+    nearest: &[Option<(usize, f32)>],
+    of: &[usize],
+    accept: f32,
+) -> Vec<f32> {
     of.par_iter()
         .map(|&i| {
             let (p, n) = (points[i], normals[i]);
-            let same_side = |j: usize| normals[j].dot(n) >= SAME_SIDE_COS;
+            let same_side = |j: usize| normals[j].dot(n) >= accept;
             match nearest[i] {
                 Some((j, d2)) if same_side(j) => d2,
                 _ => tree.nearest_accepted(p, Some(i), same_side).map_or(f32::INFINITY, |(_, d2)| d2),
@@ -1355,7 +1396,16 @@ mod tests {
             .iter()
             .map(|&(hit, radiance, draws)| ProbeCandidate { hit, radiance, draws, id: 100 + hit as u64, track: None })
             .collect();
-        a.push(ProbeHits { hits, normals, shading: normals, tree, nearest: &nearest, candidates: &candidates, draw_scale: 1.0 });
+        a.push(ProbeHits {
+            hits,
+            normals,
+            shading: normals,
+            tree,
+            nearest: &nearest,
+            candidates: &candidates,
+            draw_scale: 1.0,
+            scene: None,
+        });
     }
 
     /// A cell's mean radiance weighs each candidate by its hit's area over
@@ -1399,7 +1449,16 @@ mod tests {
             let tree = KnnDensity::new(&hits).unwrap();
             let nearest = tree.member_nearest();
             let normals = [Vec3::Y; 3];
-            a.push(ProbeHits { hits: &hits, normals: &normals, shading: &normals, tree, nearest: &nearest, candidates, draw_scale: 1.0 });
+            a.push(ProbeHits {
+                hits: &hits,
+                normals: &normals,
+                shading: &normals,
+                tree,
+                nearest: &nearest,
+                candidates,
+                draw_scale: 1.0,
+                scene: None,
+            });
         };
         // The older iteration: candidates 1 (L 2, D 1) and 2 (L 4, D 3) in
         // the first cell, 3 (L 8, D 6) in the second; the newer: candidate

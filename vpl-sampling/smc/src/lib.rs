@@ -88,6 +88,7 @@
 
 #![warn(missing_docs)]
 
+mod ball_area;
 mod config;
 mod flux;
 mod placement;
@@ -95,6 +96,7 @@ mod points;
 mod relight;
 mod sampler;
 
+pub use ball_area::{ProbeArea, surface_in_ball};
 pub use config::{SmcConfig, SmcError};
 pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, Track, surface_neighbour_sq};
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};

@@ -236,7 +236,8 @@ impl SmcSampler {
             lighting: None,
             probes: AreaProbes::new(config.probe_iterations)
                 .with_per_iteration(config.probes_per_iteration())
-                .with_window(config.probe_window),
+                .with_window(config.probe_window)
+                .with_ball(config.probe_area),
             shown: vec![None; config.vpls],
             warming: false,
             collect_probes: true,
@@ -516,6 +517,7 @@ impl SmcSampler {
                     nearest: &nearest,
                     candidates: &sampled,
                     draw_scale: 1.0 / drawn.draws.max(1) as f64,
+                    scene: Some(scene),
                 });
             }
             tm.knn_ms += ms(t0);

@@ -23,7 +23,12 @@
 //!   at a radius about √(T/s) times shorter (T iterations held, s hits a
 //!   probe).
 //!
-//! and the median time of SMC's step over the last 32 frames.
+//! and the median time of SMC's step over the last 32 frames. A second
+//! line sets the probes' areas and light (Σ b, Σ b L with the own
+//! radiances) against an independent measure of the surface they stand
+//! for: uniform points on the mesh, kept where a pixel centre of a 64×48
+//! G-buffer sees them in its upper hemisphere, with their radiance: in all
+//! and by class of normal (up, down, side), with standard errors.
 //!
 //! `sites` against `pieces` is the error of a point standing for its cell;
 //! `pieces` against `cell means` the error of the cells' mean radiances
@@ -152,6 +157,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &TrackRequest { pixels: &pixels, spp: 1024, seed: 0, frame: target as u64, footprint: Footprint::Centre },
     );
     let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
+    let reach = reachable(&scene, &camera, seed, &estimator);
     println!(
         "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3}, own pooled (side) {:.3}, own pooled (surface) {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances', the candidates' {:.3}); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
         sites / truth,
@@ -164,5 +170,117 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pieces_light / own_light,
         smc.stats().candidate_light / own_light
     );
+    // The probes' areas and light by class, against the independent
+    // measure of what they stand for.
+    let mut probed = [[0.0f64; 2]; 3];
+    for (&(_, _, n, a), &l) in areas.iter().zip(&own_l) {
+        let c = class(n);
+        probed[c][0] += a as f64;
+        probed[c][1] += a as f64 * luminance(l) as f64;
+    }
+    let line: Vec<String> = ["up", "down", "side"]
+        .iter()
+        .enumerate()
+        .map(|(c, name)| {
+            let r = &reach[c];
+            format!(
+                "{name}: area {:.3} of {:.1} ± {:.1} m², light {:.3} of {:.3} ± {:.3}",
+                probed[c][0] / r.area.0,
+                r.area.0,
+                r.area.1,
+                probed[c][1] / r.light.0.max(1e-30),
+                r.light.0,
+                r.light.1
+            )
+        })
+        .collect();
+    let (a_all, l_all) = (reach.iter().map(|r| r.area.0).sum::<f64>(), reach.iter().map(|r| r.light.0).sum::<f64>());
+    println!(
+        "  probes over the reachable surface (uniform points on the mesh seen by a 64×48 G-buffer's points): all: area {:.3}, light {:.3}; {}",
+        probed.iter().map(|p| p[0]).sum::<f64>() / a_all,
+        probed.iter().map(|p| p[1]).sum::<f64>() / l_all.max(1e-30),
+        line.join("; ")
+    );
     Ok(())
+}
+
+/// The class of a surface by its normal: up (n_y > 0.5), down (n_y < −0.5), side.
+fn class(n: Vec3) -> usize {
+    if n.y > 0.5 {
+        0
+    } else if n.y < -0.5 {
+        1
+    } else {
+        2
+    }
+}
+
+/// An estimate with its standard error.
+struct Reach {
+    area: (f64, f64),
+    light: (f64, f64),
+}
+
+/// The surface SMC's candidate rays can reach, by class ([`class`]): 16,384
+/// points drawn uniformly by area on the mesh, each kept where a point the
+/// camera sees (a pixel centre of a 64×48 G-buffer) sees it within its
+/// upper hemisphere, with its radiance there (facing that point, 64
+/// paths): the area and ∫ L dA (luminance) of each class, with standard
+/// errors. Independent of the probes: no hit, no neighbour distance.
+fn reachable(scene: &vpl_core::Scene, camera: &vpl_core::Camera, seed: u64, estimator: &PathRadiosity) -> [Reach; 3] {
+    let fine = camera.with_resolution((64, 48)).expect("a valid resolution");
+    let g = render_gbuffer(scene, &fine);
+    let xs: Vec<(Vec3, Vec3)> =
+        g.samples.iter().filter(|s| s.depth.is_finite() && s.albedo.max_element() > 0.0).map(|s| (s.p, s.ng)).collect();
+    let tris = &scene.geometry.triangles;
+    let mut cdf = Vec::with_capacity(tris.len());
+    let mut acc = 0.0f64;
+    for t in tris {
+        acc += t.area.max(0.0) as f64;
+        cdf.push(acc);
+    }
+    let total = acc;
+    let eps = scene.epsilon();
+    let k = 16_384usize;
+    let found: Vec<Option<(usize, f64)>> = (0..k)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = vpl_core::rng::stream(seed, i as u64, vpl_core::rng::Purpose::TEST, 0x5eac);
+            let u = rng.next_f32() as f64 * total;
+            let t = cdf.partition_point(|&c| c <= u).min(tris.len() - 1);
+            let (u1, u2) = rng.next_2d();
+            let s = u1.sqrt();
+            let (b1, b2) = (s * (1.0 - u2), s * u2);
+            let tri = &tris[t];
+            let y = tri.p0 + tri.e1 * b1 + tri.e2 * b2;
+            for &(x, nx) in &xs {
+                if (y - x).dot(nx) <= 0.0 {
+                    continue;
+                }
+                let f = if (x - y).dot(tri.ng) > 0.0 { tri.ng } else { -tri.ng };
+                if scene.visible(x + nx * eps, y + f * eps) {
+                    let point = scene.surface_point(t as u32, b1, b2).facing(f);
+                    let l = luminance(estimator.radiosity(scene, &point, 0xa5ea ^ i as u64)) as f64;
+                    return Some((class(f), l));
+                }
+            }
+            None
+        })
+        .collect();
+    let scale = total / k as f64;
+    std::array::from_fn(|c| {
+        let (mut n, mut sl, mut sl2) = (0.0f64, 0.0f64, 0.0f64);
+        for &(cl, l) in found.iter().flatten() {
+            if cl == c {
+                n += 1.0;
+                sl += l;
+                sl2 += l * l;
+            }
+        }
+        let kf = k as f64;
+        // Each draw gives total·1[class] and total·L·1[class]: means and
+        // standard errors of k independent draws.
+        let se = |sum: f64, sum2: f64| ((sum2 / kf - (sum / kf).powi(2)).max(0.0) / (kf - 1.0)).sqrt() * total;
+        Reach { area: (n * scale, se(n, n)), light: (sl * scale, se(sl, sl2)) }
+    })
 }

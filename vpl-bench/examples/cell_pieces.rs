@@ -24,11 +24,12 @@
 //!   probe).
 //!
 //! and the median time of SMC's step over the last 32 frames. A second
-//! line sets the probes' areas and light (Σ b, Σ b L with the own
-//! radiances) against an independent measure of the surface they stand
-//! for: uniform points on the mesh, kept where a pixel centre of a 64×48
-//! G-buffer sees them in its upper hemisphere, with their radiance: in all
-//! and by class of normal (up, down, side), with standard errors.
+//! line sets the probes' light as 64 of the camera's points receive it,
+//! Σ b L Ḡ (own radiances, Ḡ the mean geometry term to those points), against
+//! an independent measure of it, ∫ L Ḡ dA by uniform points on the mesh
+//! with their radiances: in all and by class of normal (up, down, side),
+//! with standard errors. Its ratio is the areas' error where the image
+//! takes its light from.
 //!
 //! `sites` against `pieces` is the error of a point standing for its cell;
 //! `pieces` against `cell means` the error of the cells' mean radiances
@@ -157,7 +158,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &TrackRequest { pixels: &pixels, spp: 1024, seed: 0, frame: target as u64, footprint: Footprint::Centre },
     );
     let truth = tracked.iter().map(|t| luminance(t.mean) as f64).sum::<f64>() / tracked.len().max(1) as f64;
-    let reach = reachable(&scene, &camera, seed, &estimator);
+    let viewers = viewers(&scene, &camera);
+    let reach = reachable(&scene, &viewers, seed, &estimator);
     println!(
         "{scene_name} frame {target} seed {seed}: sites {:.3}, pieces {:.3}, own {:.3}, cell means {:.3}, own pooled (side) {:.3}, own pooled (surface) {:.3} of the path tracer's ({} probes; the pieces' light {:.3} of the own radiances', the candidates' {:.3}); SMC's step {step:.1} ms (radiosity {radiosity:.1}), median of the last 32",
         sites / truth,
@@ -170,35 +172,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pieces_light / own_light,
         smc.stats().candidate_light / own_light
     );
-    // The probes' areas and light by class, against the independent
-    // measure of what they stand for.
-    let mut probed = [[0.0f64; 2]; 3];
-    for (&(_, _, n, a), &l) in areas.iter().zip(&own_l) {
-        let c = class(n);
-        probed[c][0] += a as f64;
-        probed[c][1] += a as f64 * luminance(l) as f64;
+    // The probes' light as the camera's points receive it, by class,
+    // against the independent measure of it.
+    let mut probed = [0.0f64; 3];
+    let coupled: Vec<f64> = areas.par_iter().map(|&(_, p, n, _)| coupling(&scene, &viewers, p, n)).collect();
+    for ((&(_, _, n, a), &l), &g) in areas.iter().zip(&own_l).zip(&coupled) {
+        probed[class(n)] += a as f64 * luminance(l) as f64 * g;
     }
     let line: Vec<String> = ["up", "down", "side"]
         .iter()
         .enumerate()
-        .map(|(c, name)| {
-            let r = &reach[c];
-            format!(
-                "{name}: area {:.3} of {:.1} ± {:.1} m², light {:.3} of {:.3} ± {:.3}",
-                probed[c][0] / r.area.0,
-                r.area.0,
-                r.area.1,
-                probed[c][1] / r.light.0.max(1e-30),
-                r.light.0,
-                r.light.1
-            )
-        })
+        .map(|(c, name)| format!("{name}: {:.3} ({:.3} ± {:.3})", probed[c] / reach[c].0.max(1e-30), reach[c].0, reach[c].1))
         .collect();
-    let (a_all, l_all) = (reach.iter().map(|r| r.area.0).sum::<f64>(), reach.iter().map(|r| r.light.0).sum::<f64>());
+    let all: f64 = reach.iter().map(|r| r.0).sum();
+    let se_all = reach.iter().map(|r| r.1 * r.1).sum::<f64>().sqrt();
     println!(
-        "  probes over the reachable surface (uniform points on the mesh seen by a 64×48 G-buffer's points): all: area {:.3}, light {:.3}; {}",
-        probed.iter().map(|p| p[0]).sum::<f64>() / a_all,
-        probed.iter().map(|p| p[1]).sum::<f64>() / l_all.max(1e-30),
+        "  probes' light at the camera's points (Σ b L Ḡ) over the surface's (∫ L Ḡ dA, uniform points on the mesh): all {:.3} (± {:.3}); {}",
+        probed.iter().sum::<f64>() / all,
+        se_all / all,
         line.join("; ")
     );
     Ok(())
@@ -215,23 +206,42 @@ fn class(n: Vec3) -> usize {
     }
 }
 
-/// An estimate with its standard error.
-struct Reach {
-    area: (f64, f64),
-    light: (f64, f64),
-}
-
-/// The surface SMC's candidate rays can reach, by class ([`class`]): 16,384
-/// points drawn uniformly by area on the mesh, each kept where a point the
-/// camera sees (a pixel centre of a 64×48 G-buffer) sees it within its
-/// upper hemisphere, with its radiance there (facing that point, 64
-/// paths): the area and ∫ L dA (luminance) of each class, with standard
-/// errors. Independent of the probes: no hit, no neighbour distance.
-fn reachable(scene: &vpl_core::Scene, camera: &vpl_core::Camera, seed: u64, estimator: &PathRadiosity) -> [Reach; 3] {
+/// 64 points the camera sees (pixel centres of a 64×48 G-buffer, every
+/// 48th of those that reflect), as (point, normal).
+fn viewers(scene: &vpl_core::Scene, camera: &vpl_core::Camera) -> Vec<(Vec3, Vec3)> {
     let fine = camera.with_resolution((64, 48)).expect("a valid resolution");
     let g = render_gbuffer(scene, &fine);
-    let xs: Vec<(Vec3, Vec3)> =
+    let seen: Vec<(Vec3, Vec3)> =
         g.samples.iter().filter(|s| s.depth.is_finite() && s.albedo.max_element() > 0.0).map(|s| (s.p, s.ng)).collect();
+    let stride = (seen.len() / 64).max(1);
+    seen.into_iter().step_by(stride).take(64).collect()
+}
+
+/// Ḡ(y): the mean geometry term between `y` (normal `n`, the side that
+/// shines) and the `viewers`, with visibility: how much of y's light the
+/// camera's points receive. d² is kept above (10⁻² of the scene's radius)²
+/// so that a point beside a viewer does not swamp the mean.
+fn coupling(scene: &vpl_core::Scene, viewers: &[(Vec3, Vec3)], y: Vec3, n: Vec3) -> f64 {
+    let eps = scene.epsilon();
+    let d2_min = (1e-2 * scene.radius()).powi(2);
+    let mut sum = 0.0f64;
+    for &(x, nx) in viewers {
+        let d = y - x;
+        let d2 = d.length_squared();
+        let (cx, cy) = (nx.dot(d), -n.dot(d));
+        if cx <= 0.0 || cy <= 0.0 || !scene.visible(x + nx * eps, y + n * eps) {
+            continue;
+        }
+        sum += (cx * cy) as f64 / (d2 as f64 * d2.max(d2_min) as f64);
+    }
+    sum / viewers.len().max(1) as f64
+}
+
+/// ∫ L Ḡ dA by class ([`class`], [`coupling`]) with its standard error:
+/// 131,072 points drawn uniformly by area on the mesh, each side of each
+/// with its radiance (64 paths) where the viewers see it. Independent of
+/// the probes: no hit, no neighbour distance.
+fn reachable(scene: &vpl_core::Scene, viewers: &[(Vec3, Vec3)], seed: u64, estimator: &PathRadiosity) -> [(f64, f64); 3] {
     let tris = &scene.geometry.triangles;
     let mut cdf = Vec::with_capacity(tris.len());
     let mut acc = 0.0f64;
@@ -240,9 +250,8 @@ fn reachable(scene: &vpl_core::Scene, camera: &vpl_core::Camera, seed: u64, esti
         cdf.push(acc);
     }
     let total = acc;
-    let eps = scene.epsilon();
-    let k = 16_384usize;
-    let found: Vec<Option<(usize, f64)>> = (0..k)
+    let k = 131_072usize;
+    let draws: Vec<[f64; 3]> = (0..k)
         .into_par_iter()
         .map(|i| {
             let mut rng = vpl_core::rng::stream(seed, i as u64, vpl_core::rng::Purpose::TEST, 0x5eac);
@@ -253,34 +262,22 @@ fn reachable(scene: &vpl_core::Scene, camera: &vpl_core::Camera, seed: u64, esti
             let (b1, b2) = (s * (1.0 - u2), s * u2);
             let tri = &tris[t];
             let y = tri.p0 + tri.e1 * b1 + tri.e2 * b2;
-            for &(x, nx) in &xs {
-                if (y - x).dot(nx) <= 0.0 {
-                    continue;
-                }
-                let f = if (x - y).dot(tri.ng) > 0.0 { tri.ng } else { -tri.ng };
-                if scene.visible(x + nx * eps, y + f * eps) {
+            let mut out = [0.0f64; 3];
+            for (side, f) in [tri.ng, -tri.ng].into_iter().enumerate() {
+                let g = coupling(scene, viewers, y, f);
+                if g > 0.0 {
                     let point = scene.surface_point(t as u32, b1, b2).facing(f);
-                    let l = luminance(estimator.radiosity(scene, &point, 0xa5ea ^ i as u64)) as f64;
-                    return Some((class(f), l));
+                    let l = luminance(estimator.radiosity(scene, &point, 0xa5ea ^ (2 * i + side) as u64)) as f64;
+                    out[class(f)] += total * l * g;
                 }
             }
-            None
+            out
         })
         .collect();
-    let scale = total / k as f64;
     std::array::from_fn(|c| {
-        let (mut n, mut sl, mut sl2) = (0.0f64, 0.0f64, 0.0f64);
-        for &(cl, l) in found.iter().flatten() {
-            if cl == c {
-                n += 1.0;
-                sl += l;
-                sl2 += l * l;
-            }
-        }
         let kf = k as f64;
-        // Each draw gives total·1[class] and total·L·1[class]: means and
-        // standard errors of k independent draws.
-        let se = |sum: f64, sum2: f64| ((sum2 / kf - (sum / kf).powi(2)).max(0.0) / (kf - 1.0)).sqrt() * total;
-        Reach { area: (n * scale, se(n, n)), light: (sl * scale, se(sl, sl2)) }
+        let mean = draws.iter().map(|d| d[c]).sum::<f64>() / kf;
+        let var = draws.iter().map(|d| (d[c] - mean).powi(2)).sum::<f64>() / (kf - 1.0);
+        (mean, (var / kf).sqrt())
     })
 }

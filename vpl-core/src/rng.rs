@@ -59,6 +59,8 @@ impl Purpose {
     pub const VIEW: Purpose = Purpose(22);
     /// The point of its cell a VPL shines from (index = the VPL's id).
     pub const PLACEMENT: Purpose = Purpose(23);
+    /// The lights a stochastic lightcut samples (index = pixel).
+    pub const LIGHTCUT: Purpose = Purpose(24);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

@@ -65,9 +65,11 @@ mod gather;
 mod gather_maps;
 mod gbuffer;
 mod interleaved;
+mod lightcuts;
 
 pub use direct::direct_light;
 pub use exhaustive::ExhaustiveShader;
 pub use filter::CrossBilateral;
 pub use gbuffer::{environment_at_misses, render_gbuffer};
 pub use interleaved::{CLASSES, InterleavedShader, ShadeTimings, TILE};
+pub use lightcuts::LightcutShader;

@@ -1,0 +1,209 @@
+//! Stochastic lightcuts (Yuksel, *Stochastic Lightcuts*, HPG 2019) over any
+//! VPL set: per pixel a cut of at most N nodes of a light tree
+//! ([`vpl_lighttree::LightTree`]) and one VPL sampled from each.
+//!
+//! For a receiver x, the cut starts at the root and the node of largest
+//! importance is split into its children until the cut holds N nodes (or
+//! only lights). From each cut node C one VPL y is drawn by walking down,
+//! each child taken with probability proportional to its importance at x,
+//! and its term is divided by the probability p_y of that walk:
+//!
+//! ```text
+//! L(x) = ρ/π Σ_{C ∈ cut} Φ_y G(x, y) V(x, y) / p_y ,   y ~ p within C
+//! ```
+//!
+//! so each cut node's term is an unbiased estimate of the sum over its
+//! lights, and L(x) one of the exhaustive sum Σ_y Φ_y G V (eq. 2 of the
+//! SMC paper), whatever the cut, as long as every light that can reach x
+//! has p_y > 0. The importance is pbrt-v4's bound of a node's light at a
+//! surface point (`LightBounds::Importance`, the cosine emitter's θ_e =
+//! π/2): its power over the squared distance to its box's centre (no less
+//! than the box's half diagonal squared), times bounds of the cosines at
+//! the light and at x from the box and the normals' cone. It is zero only
+//! where no light of the node can reach x, so no light that can is ever
+//! left out. The geometry term is clamped as the other shaders clamp it
+//! when a clamp is set (then the estimate is of the clamped sum).
+
+use rayon::prelude::*;
+use std::f32::consts::FRAC_1_PI;
+use vpl_core::glam::Vec3;
+use vpl_core::image::luminance;
+use vpl_core::rng::{Purpose, stream};
+use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
+use vpl_lighttree::{Bounds, Child, Emitter, LightTree};
+
+/// Stochastic lightcuts: at most `cut` VPLs a pixel, each sampled by
+/// importance from its node of the cut, unbiased against
+/// [`crate::ExhaustiveShader`] on the same set and visibility.
+#[derive(Clone, Debug)]
+pub struct LightcutShader {
+    /// Geometry-term clamp (`None`: off, the estimate of the unclamped sum).
+    pub clamp: Option<GeometryClamp>,
+    /// Cut size N: VPLs sampled at each pixel.
+    pub cut: usize,
+    /// Seed of the samples; each shade draws anew (its frame count).
+    pub seed: u64,
+    frame: u64,
+}
+
+impl LightcutShader {
+    /// A shader sampling `cut` VPLs a pixel (at least 1), with `clamp` and `seed`.
+    pub fn new(cut: usize, clamp: Option<GeometryClamp>, seed: u64) -> LightcutShader {
+        LightcutShader { clamp, cut: cut.max(1), seed, frame: 0 }
+    }
+}
+
+impl IndirectShader for LightcutShader {
+    fn set_clamp(&mut self, clamp: Option<GeometryClamp>) {
+        self.clamp = clamp;
+    }
+
+    fn name(&self) -> &'static str {
+        "lightcuts"
+    }
+
+    fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
+        let frame = self.frame;
+        self.frame += 1;
+        let slots: Vec<Option<Emitter>> =
+            vpls.slots().iter().map(|s| s.map(|v| Emitter { p: v.y, n: v.n, power: luminance(v.flux) })).collect();
+        let mut img = Image::new(gbuf.width, gbuf.height);
+        // More slots than a tree addresses (2³¹) cannot come from a VplSet
+        // that fits in memory; such a set shades to black rather than panic.
+        let Ok(tree) = LightTree::build(&slots) else { return img };
+        let Some(root) = tree.root() else { return img };
+        let g_max = self.clamp.map_or(f32::INFINITY, |c| c.g_max);
+        let cut = self.cut.max(1);
+        img.data.par_iter_mut().enumerate().for_each(|(pixel, out)| {
+            let s = &gbuf.samples[pixel];
+            if !s.depth.is_finite() || s.albedo.max_element() <= 0.0 {
+                return;
+            }
+            let (x, n) = (s.p, s.ng);
+            let importance = |c: Child| node_importance(&tree.bounds(c, &slots), x, n);
+            let nodes = select_cut(&tree, root, cut, &importance);
+            let mut rng = stream(self.seed, frame, Purpose::LIGHTCUT, pixel as u64);
+            let mut sum = Vec3::ZERO;
+            for (node, _) in nodes {
+                // Walk down to one light, each child by its importance.
+                let (mut at, mut p) = (node, 1.0f32);
+                while let Child::Node(i) = at {
+                    let [a, b] = tree.node(i).children();
+                    let (ia, ib) = (importance(a), importance(b));
+                    let total = ia + ib;
+                    if total.is_nan() || total <= 0.0 || total.is_infinite() {
+                        p = 0.0;
+                        break;
+                    }
+                    let pa = ia / total;
+                    if rng.next_f32() < pa {
+                        at = a;
+                        p *= pa;
+                    } else {
+                        at = b;
+                        p *= 1.0 - pa;
+                    }
+                }
+                let Child::Slot(slot) = at else { continue };
+                if p <= 0.0 {
+                    continue;
+                }
+                let Some(v) = vpls.get(slot as usize) else { continue };
+                let d = x - v.y;
+                let d2 = d.length_squared();
+                let (cos_y, cos_x) = (v.n.dot(d), -n.dot(d));
+                if !(cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0) {
+                    continue;
+                }
+                let g = (cos_y * cos_x / (d2 * d2)).min(g_max);
+                let visible = vis.visible(slot as usize, x, n);
+                if visible > 0.0 {
+                    sum += v.flux * (g * visible / p);
+                }
+            }
+            *out = s.albedo * FRAC_1_PI * sum;
+        });
+        img
+    }
+}
+
+/// The cut at `x`: from the root, the node of largest importance split
+/// until `n` nodes are held or none left to split; nodes of no importance
+/// (no light of theirs reaches x) are dropped. Ties go to the earlier node,
+/// so the cut depends on x alone.
+fn select_cut(tree: &LightTree, root: Child, n: usize, importance: &dyn Fn(Child) -> f32) -> Vec<(Child, f32)> {
+    let mut cut: Vec<(Child, f32)> = Vec::with_capacity(n + 1);
+    let r = importance(root);
+    if r > 0.0 {
+        cut.push((root, r));
+    }
+    while cut.len() < n {
+        let mut best: Option<usize> = None;
+        for (k, &(c, w)) in cut.iter().enumerate() {
+            if matches!(c, Child::Node(_)) && best.is_none_or(|b| w > cut[b].1) {
+                best = Some(k);
+            }
+        }
+        let Some(k) = best else { break };
+        let Child::Node(i) = cut[k].0 else { break };
+        cut.swap_remove(k);
+        for c in tree.node(i).children() {
+            let w = importance(c);
+            if w > 0.0 {
+                cut.push((c, w));
+            }
+        }
+    }
+    cut
+}
+
+/// cos(max(0, θ_a − θ_b)) from the sines and cosines of both angles.
+fn cos_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b { 1.0 } else { cos_a * cos_b + sin_a * sin_b }
+}
+
+/// sin(max(0, θ_a − θ_b)).
+fn sin_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b { 0.0 } else { sin_a * cos_b - cos_a * sin_b }
+}
+
+fn sin_of(cos: f32) -> f32 {
+    (1.0 - cos * cos).max(0.0).sqrt()
+}
+
+/// Slack under which a cosine bound counts as "cannot reach" (rounding of
+/// the bounds must never exclude a light that reaches x).
+const SLACK: f32 = 1e-4;
+
+/// A node's importance at the receiver `x` with normal `n`: pbrt-v4's
+/// `LightBounds::Importance` for cosine emitters, one-sided at the receiver.
+fn node_importance(b: &Bounds, x: Vec3, n: Vec3) -> f32 {
+    if b.power.is_nan() || b.power <= 0.0 || b.cone.is_empty() {
+        return 0.0;
+    }
+    let centre = (b.lo + b.hi) * 0.5;
+    let r2 = (b.hi - b.lo).length_squared() * 0.25;
+    let to = centre - x;
+    let dist2 = to.length_squared();
+    // The cone of directions from x that the box's bounding sphere subtends.
+    let cos_b = if dist2 <= r2 { -1.0 } else { (1.0 - r2 / dist2).max(0.0).sqrt() };
+    let sin_b = sin_of(cos_b);
+    let d2 = dist2.max(r2).max(1e-12);
+    let dir = if dist2 > 0.0 { to / dist2.sqrt() } else { Vec3::ZERO };
+    // At the light: the angle between the normals' cone and the direction to x.
+    let cos_w = b.cone.axis.dot(-dir).clamp(-1.0, 1.0);
+    let cos_o = b.cone.cos_theta.clamp(-1.0, 1.0);
+    let cos_x = cos_sub_clamped(sin_of(cos_w), cos_w, sin_of(cos_o), cos_o);
+    let sin_x = sin_sub_clamped(sin_of(cos_w), cos_w, sin_of(cos_o), cos_o);
+    let cos_light = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+    if cos_light <= -SLACK {
+        return 0.0;
+    }
+    // At the receiver: the angle between its normal and the direction to the box.
+    let cos_i = n.dot(dir).clamp(-1.0, 1.0);
+    let cos_receiver = cos_sub_clamped(sin_of(cos_i), cos_i, sin_b, cos_b);
+    if cos_receiver <= -SLACK {
+        return 0.0;
+    }
+    b.power * cos_light.max(SLACK) * cos_receiver.max(SLACK) / d2
+}

@@ -199,6 +199,8 @@ enum ShadingArg {
     Interleaved,
     /// Every VPL at every pixel.
     Exhaustive,
+    /// Stochastic lightcuts: --cut VPLs a pixel, sampled through a light tree (unbiased).
+    Lightcuts,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -298,6 +300,9 @@ struct VplArgs {
     /// Leave interleaved shading unfiltered.
     #[arg(long)]
     no_filter: bool,
+    /// VPLs a pixel of `--shading lightcuts`.
+    #[arg(long, value_name = "N", default_value_t = vpl_render::ShadingSpec::DEFAULT_CUT)]
+    cut: u32,
     /// Bias compensation of the clamp (Kollig and Keller 2004): N gather rays per pixel add back
     /// the light the clamp removed, so the image converges to the unclamped one (0: off).
     #[arg(long, value_name = "N", default_value_t = 0)]
@@ -623,6 +628,8 @@ fn pipeline_spec(
         },
         shading: match v.shading {
             ShadingArg::Exhaustive => ShadingSpec::Exhaustive,
+            ShadingArg::Lightcuts if v.cut == 0 => return Err("--cut must be at least 1".into()),
+            ShadingArg::Lightcuts => ShadingSpec::Lightcuts { cut: v.cut },
             ShadingArg::Interleaved => ShadingSpec::Interleaved { filter: !v.no_filter },
         },
         clamp,

@@ -247,6 +247,36 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
     }
 }
 
+/// `--shading lightcuts --cut 8` renders through a light tree, near the
+/// exhaustive image (unbiased: within 3 % on the image mean at 64 VPLs a
+/// pixel of 256), and a cut of 0 is refused in one line.
+#[test]
+fn lightcuts_render_near_the_exhaustive_image() {
+    let d = scratch("lightcuts");
+    let render = |shading: &str, cut: &str| {
+        let out = d.join(format!("{shading}-{cut}.exr"));
+        let o = vpl()
+            .args(["render", "--scene", "cornell", "--method", "vpl", "--vpls", "256", "--size", "32x32", "--mode", "indirect"])
+            .args(["--visibility", "raytrace", "--clamp", "off", "--shading", shading, "--cut", cut, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        (o.status.code(), err, out)
+    };
+    let (code, err, out) = render("exhaustive", "32");
+    assert_eq!(code, Some(0), "{err}");
+    let all = vpl_core::Image::read_exr(&out).unwrap().mean();
+    let (code, err, out) = render("lightcuts", "64");
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("lightcuts"), "the summary names the shader: {err}");
+    let cut = vpl_core::Image::read_exr(&out).unwrap().mean();
+    assert!((cut[0] / all[0] - 1.0).abs() < 0.03, "lightcuts {cut:?} against exhaustive {all:?}");
+    let (code, err, _) = render("lightcuts", "0");
+    assert_eq!(code, Some(2));
+    assert!(err.contains("--cut") && err.trim_end().lines().count() == 1, "{err}");
+}
+
 /// `vpl sequence` with SMC: one EXR and PNG per frame, tracked.csv with 8
 /// pixels per frame, frames.csv with at most M_max VPLs moved after the
 /// first frame; bad frame ranges are one line and exit 2.

@@ -182,6 +182,8 @@ impl Backend for GpuBackend {
                 s.publish_to(self.frames.clone());
                 Box::new(s)
             }
+            // No device twin yet: the host's, over a G-buffer read back.
+            ShadingSpec::Lightcuts { cut } => Box::new(vpl_shading::LightcutShader::new(cut as usize, clamp, seed)),
         })
     }
 }

@@ -65,6 +65,16 @@ def test_auto_backend_is_a_device_that_opens_else_the_cpu(cornell):
     assert np.isfinite(r.frame(0)).all()
 
 
+def test_lightcuts_shade_by_name(cornell):
+    """`shading="lightcuts:N"`, as the command line spells it: a cut of N
+    VPLs a pixel through a light tree; a cut of 0 is an error."""
+    r = vpl.Renderer(cornell, sampler="ir", vpls=64, size=(16, 16), mode="indirect", visibility="raytraced", shading="lightcuts:8")
+    img = r.frame(0)
+    assert np.isfinite(img).all() and img.mean() > 0
+    with pytest.raises(vpl.VplError, match="cut"):
+        vpl.Renderer(cornell, shading="lightcuts:0")
+
+
 def test_bad_settings_raise_vpl_errors(cornell):
     with pytest.raises(vpl.VplError, match="nope"):
         vpl.Renderer(cornell, sampler="nope")

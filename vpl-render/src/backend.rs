@@ -5,7 +5,7 @@
 use crate::error::RenderError;
 use crate::spec::{ShadingSpec, VisibilitySpec};
 use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, VplVisibility};
-use vpl_shading::{ExhaustiveShader, InterleavedShader};
+use vpl_shading::{ExhaustiveShader, InterleavedShader, LightcutShader};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 /// A place the stages of a VPL frame run.
@@ -88,6 +88,7 @@ impl Backend for CpuBackend {
     fn shader(&self, spec: ShadingSpec, clamp: Option<GeometryClamp>, seed: u64) -> Result<Box<dyn IndirectShader>, RenderError> {
         Ok(match spec {
             ShadingSpec::Exhaustive => Box::new(ExhaustiveShader { clamp }),
+            ShadingSpec::Lightcuts { cut } => Box::new(LightcutShader::new(cut as usize, clamp, seed)),
             ShadingSpec::Interleaved { filter } => {
                 let mut s = InterleavedShader::new(clamp, seed);
                 if !filter {

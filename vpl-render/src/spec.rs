@@ -5,7 +5,7 @@
 //! | value | spelling |
 //! | --- | --- |
 //! | [`VisibilitySpec`] | `raytrace`, `shadowmap` (128² texels), `shadowmap:N` |
-//! | [`ShadingSpec`] | `interleaved` (filtered), `interleaved-unfiltered`, `exhaustive` |
+//! | [`ShadingSpec`] | `interleaved` (filtered), `interleaved-unfiltered`, `exhaustive`, `lightcuts` (a cut of 32), `lightcuts:N` |
 //! | [`Clamp`] | `auto`, `scene-area`, `off`, or G_max as a positive number |
 //!
 //! ```
@@ -14,6 +14,8 @@
 //! assert_eq!("shadowmap:256".parse::<VisibilitySpec>().unwrap(), VisibilitySpec::ShadowMaps(256));
 //! assert_eq!(VisibilitySpec::default().to_string(), "shadowmap:128");
 //! assert_eq!("interleaved-unfiltered".parse::<ShadingSpec>().unwrap(), ShadingSpec::Interleaved { filter: false });
+//! assert_eq!("lightcuts".parse::<ShadingSpec>().unwrap().to_string(), "lightcuts:32");
+//! assert!("lightcuts:0".parse::<ShadingSpec>().is_err());
 //! assert_eq!("scene-area".parse::<Clamp>().unwrap(), Clamp::SceneArea);
 //! for c in ["auto", "scene-area", "off", "2.5"] {
 //!     assert_eq!(c.parse::<Clamp>().unwrap().to_string(), c);
@@ -82,6 +84,18 @@ pub enum ShadingSpec {
     },
     /// Every VPL at every pixel.
     Exhaustive,
+    /// Stochastic lightcuts: `cut` VPLs a pixel, sampled through a light
+    /// tree (`vpl_shading::LightcutShader`; on the GPU backend it runs on
+    /// the host).
+    Lightcuts {
+        /// VPLs sampled at each pixel (at least 1).
+        cut: u32,
+    },
+}
+
+impl ShadingSpec {
+    /// The cut of `lightcuts` without a size.
+    pub const DEFAULT_CUT: u32 = 32;
 }
 
 impl Default for ShadingSpec {
@@ -93,11 +107,12 @@ impl Default for ShadingSpec {
 
 impl fmt::Display for ShadingSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            ShadingSpec::Interleaved { filter: true } => "interleaved",
-            ShadingSpec::Interleaved { filter: false } => "interleaved-unfiltered",
-            ShadingSpec::Exhaustive => "exhaustive",
-        })
+        match self {
+            ShadingSpec::Interleaved { filter: true } => f.write_str("interleaved"),
+            ShadingSpec::Interleaved { filter: false } => f.write_str("interleaved-unfiltered"),
+            ShadingSpec::Exhaustive => f.write_str("exhaustive"),
+            ShadingSpec::Lightcuts { cut } => write!(f, "lightcuts:{cut}"),
+        }
     }
 }
 
@@ -108,7 +123,12 @@ impl FromStr for ShadingSpec {
             "interleaved" => Ok(ShadingSpec::Interleaved { filter: true }),
             "interleaved-unfiltered" => Ok(ShadingSpec::Interleaved { filter: false }),
             "exhaustive" => Ok(ShadingSpec::Exhaustive),
-            _ => Err(format!("unknown shading '{s}' (interleaved, interleaved-unfiltered, exhaustive)")),
+            "lightcuts" => Ok(ShadingSpec::Lightcuts { cut: ShadingSpec::DEFAULT_CUT }),
+            _ => match s.strip_prefix("lightcuts:").map(str::parse::<u32>) {
+                Some(Ok(cut)) if cut >= 1 => Ok(ShadingSpec::Lightcuts { cut }),
+                Some(_) => Err(format!("shading '{s}': the cut must be a positive whole number of VPLs")),
+                None => Err(format!("unknown shading '{s}' (interleaved, interleaved-unfiltered, exhaustive, lightcuts, lightcuts:N)")),
+            },
         }
     }
 }

@@ -58,6 +58,7 @@
 
 #![warn(missing_docs)]
 
+mod culling;
 mod direct;
 mod exhaustive;
 mod filter;
@@ -67,6 +68,7 @@ mod gbuffer;
 mod interleaved;
 mod lightcuts;
 
+pub use culling::CulledShader;
 pub use direct::direct_light;
 pub use exhaustive::ExhaustiveShader;
 pub use filter::CrossBilateral;

@@ -201,6 +201,9 @@ enum ShadingArg {
     Exhaustive,
     /// Stochastic lightcuts: --cut VPLs a pixel, sampled through a light tree (unbiased).
     Lightcuts,
+    /// Every VPL at every pixel, each VPL's range cut by Russian roulette at --culling-bound
+    /// (unbiased: with --clamp off it converges to the unclamped image).
+    Culled,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -303,6 +306,10 @@ struct VplArgs {
     /// VPLs a pixel of `--shading lightcuts`.
     #[arg(long, value_name = "N", default_value_t = vpl_render::ShadingSpec::DEFAULT_CUT)]
     cut: u32,
+    /// The roulette's threshold of `--shading culled`, relative to the mean VPL's irradiance at the
+    /// diagonal of what the camera sees (larger: fewer VPL terms, more noise).
+    #[arg(long, value_name = "X", default_value_t = vpl_render::ShadingSpec::DEFAULT_BOUND, allow_hyphen_values = true)]
+    culling_bound: f32,
     /// Bias compensation of the clamp (Kollig and Keller 2004): N gather rays per pixel add back
     /// the light the clamp removed, so the image converges to the unclamped one (0: off).
     #[arg(long, value_name = "N", default_value_t = 0)]
@@ -630,6 +637,10 @@ fn pipeline_spec(
             ShadingArg::Exhaustive => ShadingSpec::Exhaustive,
             ShadingArg::Lightcuts if v.cut == 0 => return Err("--cut must be at least 1".into()),
             ShadingArg::Lightcuts => ShadingSpec::Lightcuts { cut: v.cut },
+            ShadingArg::Culled if !(v.culling_bound.is_finite() && v.culling_bound > 0.0) => {
+                return Err(format!("--culling-bound must be a positive number, got {}", v.culling_bound));
+            }
+            ShadingArg::Culled => ShadingSpec::Culled { bound: v.culling_bound },
             ShadingArg::Interleaved => ShadingSpec::Interleaved { filter: !v.no_filter },
         },
         clamp,

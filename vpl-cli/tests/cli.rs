@@ -247,9 +247,10 @@ fn vpl_method_renders_with_both_visibilities_and_shadings() {
     }
 }
 
-/// `--shading lightcuts --cut 8` renders through a light tree, near the
+/// `--shading lightcuts --cut 64` renders through a light tree, near the
 /// exhaustive image (unbiased: within 3 % on the image mean at 64 VPLs a
-/// pixel of 256), and a cut of 0 is refused in one line.
+/// pixel of 256), and a cut of 0 is refused in one line; `--shading culled`
+/// likewise.
 #[test]
 fn lightcuts_render_near_the_exhaustive_image() {
     let d = scratch("lightcuts");
@@ -275,6 +276,25 @@ fn lightcuts_render_near_the_exhaustive_image() {
     let (code, err, _) = render("lightcuts", "0");
     assert_eq!(code, Some(2));
     assert!(err.contains("--cut") && err.trim_end().lines().count() == 1, "{err}");
+    // Stochastic light culling, unbiased too: near the exhaustive image at a
+    // bound that skips some terms; a bound of 0 is refused in one line.
+    let culled = |bound: &str| {
+        let out = d.join(format!("culled-{bound}.exr"));
+        let o = vpl()
+            .args(["render", "--scene", "cornell", "--method", "vpl", "--vpls", "256", "--size", "32x32", "--mode", "indirect"])
+            .args(["--visibility", "raytrace", "--clamp", "off", "--shading", "culled", "--culling-bound", bound, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).to_string(), out)
+    };
+    let (code, err, out) = culled("1");
+    assert_eq!(code, Some(0), "{err}");
+    let m = vpl_core::Image::read_exr(&out).unwrap().mean();
+    assert!((m[0] / all[0] - 1.0).abs() < 0.03, "culled {m:?} against exhaustive {all:?}");
+    let (code, err, _) = culled("0");
+    assert_eq!(code, Some(2));
+    assert!(err.contains("--culling-bound") && err.trim_end().lines().count() == 1, "{err}");
 }
 
 /// `vpl sequence` with SMC: one EXR and PNG per frame, tracked.csv with 8

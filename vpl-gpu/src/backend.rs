@@ -184,6 +184,7 @@ impl Backend for GpuBackend {
             }
             // No device twin yet: the host's, over a G-buffer read back.
             ShadingSpec::Lightcuts { cut } => Box::new(vpl_shading::LightcutShader::new(cut as usize, clamp, seed)),
+            ShadingSpec::Culled { bound } => Box::new(vpl_shading::CulledShader::new(bound, clamp, seed)),
         })
     }
 }

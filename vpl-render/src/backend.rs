@@ -5,7 +5,7 @@
 use crate::error::RenderError;
 use crate::spec::{ShadingSpec, VisibilitySpec};
 use vpl_core::{Budget, Camera, GBuffer, GeometryClamp, IndirectShader, Scene, Services, VplVisibility};
-use vpl_shading::{ExhaustiveShader, InterleavedShader, LightcutShader};
+use vpl_shading::{CulledShader, ExhaustiveShader, InterleavedShader, LightcutShader};
 use vpl_visibility::{RayTraced, ShadowMaps};
 
 /// A place the stages of a VPL frame run.
@@ -89,6 +89,7 @@ impl Backend for CpuBackend {
         Ok(match spec {
             ShadingSpec::Exhaustive => Box::new(ExhaustiveShader { clamp }),
             ShadingSpec::Lightcuts { cut } => Box::new(LightcutShader::new(cut as usize, clamp, seed)),
+            ShadingSpec::Culled { bound } => Box::new(CulledShader::new(bound, clamp, seed)),
             ShadingSpec::Interleaved { filter } => {
                 let mut s = InterleavedShader::new(clamp, seed);
                 if !filter {

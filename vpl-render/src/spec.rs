@@ -5,7 +5,7 @@
 //! | value | spelling |
 //! | --- | --- |
 //! | [`VisibilitySpec`] | `raytrace`, `shadowmap` (128² texels), `shadowmap:N` |
-//! | [`ShadingSpec`] | `interleaved` (filtered), `interleaved-unfiltered`, `exhaustive`, `lightcuts` (a cut of 32), `lightcuts:N` |
+//! | [`ShadingSpec`] | `interleaved` (filtered), `interleaved-unfiltered`, `exhaustive`, `lightcuts` (a cut of 32), `lightcuts:N`, `culled` (bound 4), `culled:X` |
 //! | [`Clamp`] | `auto`, `scene-area`, `off`, or G_max as a positive number |
 //!
 //! ```
@@ -16,6 +16,8 @@
 //! assert_eq!("interleaved-unfiltered".parse::<ShadingSpec>().unwrap(), ShadingSpec::Interleaved { filter: false });
 //! assert_eq!("lightcuts".parse::<ShadingSpec>().unwrap().to_string(), "lightcuts:32");
 //! assert!("lightcuts:0".parse::<ShadingSpec>().is_err());
+//! assert_eq!("culled:2.5".parse::<ShadingSpec>().unwrap(), ShadingSpec::Culled { bound: 2.5 });
+//! assert_eq!("culled".parse::<ShadingSpec>().unwrap().to_string(), "culled:4");
 //! assert_eq!("scene-area".parse::<Clamp>().unwrap(), Clamp::SceneArea);
 //! for c in ["auto", "scene-area", "off", "2.5"] {
 //!     assert_eq!(c.parse::<Clamp>().unwrap().to_string(), c);
@@ -75,7 +77,7 @@ impl FromStr for VisibilitySpec {
 }
 
 /// Indirect shading.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ShadingSpec {
     /// 4×4 interleaved subsets, with or without the cross-bilateral filter.
     Interleaved {
@@ -91,11 +93,22 @@ pub enum ShadingSpec {
         /// VPLs sampled at each pixel (at least 1).
         cut: u32,
     },
+    /// Every VPL at every pixel, each VPL's range cut by Russian roulette
+    /// (`vpl_shading::CulledShader`): unbiased, so with the clamp off it
+    /// converges to the unclamped image; on the GPU backend it runs on the
+    /// host.
+    Culled {
+        /// The roulette's threshold relative to the mean VPL's irradiance
+        /// at the receivers' diagonal (positive; larger culls more).
+        bound: f32,
+    },
 }
 
 impl ShadingSpec {
     /// The cut of `lightcuts` without a size.
     pub const DEFAULT_CUT: u32 = 32;
+    /// The bound of `culled` without one.
+    pub const DEFAULT_BOUND: f32 = 4.0;
 }
 
 impl Default for ShadingSpec {
@@ -112,6 +125,7 @@ impl fmt::Display for ShadingSpec {
             ShadingSpec::Interleaved { filter: false } => f.write_str("interleaved-unfiltered"),
             ShadingSpec::Exhaustive => f.write_str("exhaustive"),
             ShadingSpec::Lightcuts { cut } => write!(f, "lightcuts:{cut}"),
+            ShadingSpec::Culled { bound } => write!(f, "culled:{bound}"),
         }
     }
 }
@@ -124,10 +138,17 @@ impl FromStr for ShadingSpec {
             "interleaved-unfiltered" => Ok(ShadingSpec::Interleaved { filter: false }),
             "exhaustive" => Ok(ShadingSpec::Exhaustive),
             "lightcuts" => Ok(ShadingSpec::Lightcuts { cut: ShadingSpec::DEFAULT_CUT }),
+            "culled" => Ok(ShadingSpec::Culled { bound: ShadingSpec::DEFAULT_BOUND }),
+            _ if s.starts_with("culled:") => match s["culled:".len()..].parse::<f32>() {
+                Ok(bound) if bound.is_finite() && bound > 0.0 => Ok(ShadingSpec::Culled { bound }),
+                _ => Err(format!("shading '{s}': the culling bound must be a positive number")),
+            },
             _ => match s.strip_prefix("lightcuts:").map(str::parse::<u32>) {
                 Some(Ok(cut)) if cut >= 1 => Ok(ShadingSpec::Lightcuts { cut }),
                 Some(_) => Err(format!("shading '{s}': the cut must be a positive whole number of VPLs")),
-                None => Err(format!("unknown shading '{s}' (interleaved, interleaved-unfiltered, exhaustive, lightcuts, lightcuts:N)")),
+                None => Err(format!(
+                    "unknown shading '{s}' (interleaved, interleaved-unfiltered, exhaustive, lightcuts, lightcuts:N, culled, culled:X)"
+                )),
             },
         }
     }

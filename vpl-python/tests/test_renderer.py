@@ -73,6 +73,10 @@ def test_lightcuts_shade_by_name(cornell):
     assert np.isfinite(img).all() and img.mean() > 0
     with pytest.raises(vpl.VplError, match="cut"):
         vpl.Renderer(cornell, shading="lightcuts:0")
+    culled = vpl.Renderer(cornell, sampler="ir", vpls=64, size=(16, 16), mode="indirect", visibility="raytraced", shading="culled:4", clamp="off")
+    assert np.isfinite(culled.frame(0)).all()
+    with pytest.raises(vpl.VplError, match="culling bound"):
+        vpl.Renderer(cornell, shading="culled:0")
 
 
 def test_bad_settings_raise_vpl_errors(cornell):

@@ -36,10 +36,14 @@ fn means(img: &Image) -> Vec<f64> {
 }
 
 fn unbiased(scene_name: &str, cut: usize, clamp: Option<GeometryClamp>) {
+    unbiased_with(scene_name, cut, clamp, 256, (48, 36));
+}
+
+fn unbiased_with(scene_name: &str, cut: usize, clamp: Option<GeometryClamp>, vpls: usize, size: (u32, u32)) {
     let setup = SceneSetup::builtin(scene_name).unwrap();
     let scene = &setup.scene;
-    let camera = setup.camera.with_resolution((48, 36)).unwrap();
-    let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls: 256, ..Default::default() }).unwrap().sample(scene, 5).clone();
+    let camera = setup.camera.with_resolution(size).unwrap();
+    let set = vpl_ir::InstantRadiosity::new(vpl_ir::IrConfig { vpls, ..Default::default() }).unwrap().sample(scene, 5).clone();
     let gbuf = render_gbuffer(scene, &camera);
     let mut vis = RayTraced::default();
     vis.update(scene, &set);
@@ -78,4 +82,11 @@ fn stochastic_lightcuts_are_unbiased_on_cornell() {
 fn stochastic_lightcuts_are_unbiased_on_office() {
     unbiased("office", 8, None);
     unbiased("office", 32, Some(GeometryClamp::new(50.0)));
+}
+
+/// 65,536 VPLs (IR's light paths, shadow rays): the tree over them, a cut
+/// of 32 a pixel, still unbiased against gathering all of them.
+#[test]
+fn stochastic_lightcuts_are_unbiased_over_64k_vpls() {
+    unbiased_with("office", 32, None, 65_536, (16, 12));
 }

@@ -83,7 +83,9 @@ impl IndirectShader for CulledShader {
                 (i.is_finite() && i > 0.0).then_some((s, i, xi))
             })
             .collect();
-        let seen = |s: &vpl_core::GSample| s.depth.is_finite() && s.albedo.max_element() > 0.0;
+        // The receivers of exhaustive shading: points that reflect, with
+        // their shading normals.
+        let seen = |s: &vpl_core::GSample| s.reflects();
         let (lo, hi) =
             gbuf.samples.iter().filter(|s| seen(s)).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), s| (l.min(s.p), h.max(s.p)));
         let diag2 = (hi - lo).length_squared();
@@ -100,7 +102,7 @@ impl IndirectShader for CulledShader {
             if !seen(s) {
                 return;
             }
-            let (x, n) = (s.p, s.ng);
+            let (x, n) = (s.p, s.n);
             let (mut sum, mut done, mut all) = (Vec3::ZERO, 0u64, 0u64);
             for &(slot, intensity, xi) in &lights {
                 let Some(v) = vpls.get(slot) else { continue };

@@ -76,10 +76,12 @@ impl IndirectShader for LightcutShader {
         let cut = self.cut.max(1);
         img.data.par_iter_mut().enumerate().for_each(|(pixel, out)| {
             let s = &gbuf.samples[pixel];
-            if !s.depth.is_finite() || s.albedo.max_element() <= 0.0 {
+            // The receivers of exhaustive shading: points that reflect, with
+            // their shading normals.
+            if !s.reflects() {
                 return;
             }
-            let (x, n) = (s.p, s.ng);
+            let (x, n) = (s.p, s.n);
             let importance = |c: Child| node_importance(&tree.bounds(c, &slots), x, n);
             let nodes = select_cut(&tree, root, cut, &importance);
             let mut rng = stream(self.seed, frame, Purpose::LIGHTCUT, pixel as u64);

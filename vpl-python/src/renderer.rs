@@ -79,6 +79,10 @@ impl PyRenderer {
     /// Builds a renderer; keyword arguments it does not name are the
     /// sampler's parameters (`m_max=16` or `**{"m-max": 16}`: underscores
     /// read as dashes), and one the sampler does not read is an error.
+    /// `shading` is spelled as on the command line: `interleaved`,
+    /// `exhaustive`, `lightcuts` or `lightcuts:N` (N VPLs a pixel through a
+    /// light tree), `culled` or `culled:X` (stochastic light culling);
+    /// `backend` is `cpu`, `gpu` (where built) or `auto`.
     #[new]
     #[pyo3(signature = (
         scene, sampler = None, vpls = 2048, visibility = "shadowmap", shadow_map = 128, shading = "interleaved",

@@ -83,8 +83,16 @@ fn gpu_interleaved_shading_matches_the_cpu_shader() {
 #[test]
 fn the_shader_reads_only_visibilities_of_its_own_device() {
     let Some(ctx) = context() else { return };
-    let Some(other_ctx) = context() else { return };
-    let (gpu, other) = (Gpu::from_context(ctx), Gpu::from_context(other_ctx));
+    let gpu = Gpu::from_context(ctx);
+    // A second device where the driver gives one (GL may not); without it
+    // the shader's own table is tested against host visibility alone.
+    let other = match vpl_gpu::GpuContext::new() {
+        Ok(c) => Some(Gpu::from_context(c)),
+        Err(e) => {
+            eprintln!("no second device ({e}): maps on another device are not tested");
+            None
+        }
+    };
     let setup = SceneSetup::builtin("cornell").unwrap();
     let scene = &setup.scene;
     let camera = setup.camera.with_resolution((48, 48)).unwrap();
@@ -94,20 +102,24 @@ fn the_shader_reads_only_visibilities_of_its_own_device() {
     let mut shader = GpuInterleavedShader::exhaustive(gpu.clone(), clamp);
 
     let mut mine = GpuShadowMaps::new(gpu.clone(), 16).unwrap();
-    let mut theirs = GpuShadowMaps::new(other.clone(), 16).unwrap();
     mine.update(scene, &set);
-    theirs.update(scene, &set);
     let mut host = RayTraced::default();
     host.update(scene, &set);
+    let mut second = GpuShadowMaps::new(gpu.clone(), 16).unwrap();
+    second.update(scene, &set);
     assert!(mine.device_key().is_some() && host.device_key().is_none());
-    assert_ne!(mine.device_key(), theirs.device_key(), "every visibility has its own key");
-    assert!(shader.on_device(&mine));
-    assert!(!shader.on_device(&theirs), "maps on another device");
+    assert_ne!(mine.device_key(), second.device_key(), "every visibility has its own key");
+    assert!(shader.on_device(&mine) && shader.on_device(&second));
     assert!(!shader.on_device(&host), "a visibility on the host");
-    // The other device's maps shade on the host, through the same answers.
-    let host_maps = shader.shade(&gbuf, &set, &theirs);
     let device_maps = shader.shade(&gbuf, &set, &mine);
-    compare("another device's maps, on the host", &device_maps, &host_maps);
+    // Another device's maps shade on the host, through the same answers.
+    if let Some(other) = other {
+        let mut theirs = GpuShadowMaps::new(other, 16).unwrap();
+        theirs.update(scene, &set);
+        assert!(!shader.on_device(&theirs), "maps on another device");
+        let host_maps = shader.shade(&gbuf, &set, &theirs);
+        compare("another device's maps, on the host", &device_maps, &host_maps);
+    }
 
     // Coarse 16² maps show the bias: k = 4 against the default k = 1.
     let mut cpu = ShadowMaps::new(16).unwrap();

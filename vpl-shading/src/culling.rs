@@ -20,6 +20,7 @@
 //! starts. The range is one sphere a VPL, as the paper's tiled culling
 //! needs.
 
+use crate::gather::clamped_g;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -106,20 +107,17 @@ impl IndirectShader for CulledShader {
             let (mut sum, mut done, mut all) = (Vec3::ZERO, 0u64, 0u64);
             for &(slot, intensity, xi) in &lights {
                 let Some(v) = vpls.get(slot) else { continue };
-                let d = x - v.y;
-                let d2 = d.length_squared();
-                let (cos_y, cos_x) = (v.n.dot(d), -n.dot(d));
-                if !(cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0) {
+                let g = clamped_g(v, x, n, g_max);
+                if g <= 0.0 {
                     continue;
                 }
                 all += 1;
                 // The roulette: evaluated iff d² < I / (ε ξ), weighted 1 / p.
-                let p = (intensity / (eps * d2)).min(1.0);
+                let p = (intensity / (eps * (x - v.y).length_squared())).min(1.0);
                 if xi >= p {
                     continue;
                 }
                 done += 1;
-                let g = (cos_y * cos_x / (d2 * d2)).min(g_max);
                 let visible = vis.visible(slot, x, n);
                 if visible > 0.0 {
                     sum += v.flux * (g * visible / p);

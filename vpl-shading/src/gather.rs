@@ -1,6 +1,7 @@
 //! The VPL-major inner loop both shaders share: one VPL at a time over a
 //! batch of receivers, so its visibility data stays in cache.
 
+use vpl_core::glam::Vec3;
 use vpl_core::{GeometryClamp, Receivers, VplSet, VplVisibility};
 
 /// Per-receiver sums of flux · min(G, G_max) · V, one array per channel.
@@ -64,6 +65,18 @@ pub(crate) fn gather(
             sums.b[i] += f.z * w[i];
         }
     }
+}
+
+/// The clamped geometry term min(G, G_max) between a receiver at `x` with
+/// normal `n_x` and the VPL `v`, as [`gather`] computes it lane by lane
+/// (cos_y cos_x / d², zero where either side faces away); for the shaders
+/// that visit one (receiver, VPL) pair at a time.
+#[inline]
+pub(crate) fn clamped_g(v: &vpl_core::Vpl, x: Vec3, n_x: Vec3, g_max: f32) -> f32 {
+    let d = x - v.y;
+    let d2 = d.length_squared();
+    let (cos_y, cos_x) = (v.n.dot(d), -n_x.dot(d));
+    if cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0 { (cos_y * cos_x / (d2 * d2)).min(g_max) } else { 0.0 }
 }
 
 /// Receivers `s..e` of `rx` as their own batch.

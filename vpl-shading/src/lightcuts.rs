@@ -24,6 +24,7 @@
 //! left out. The geometry term is clamped as the other shaders clamp it
 //! when a clamp is set (then the estimate is of the clamped sum).
 
+use crate::gather::clamped_g;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::glam::Vec3;
@@ -111,13 +112,10 @@ impl IndirectShader for LightcutShader {
                     continue;
                 }
                 let Some(v) = vpls.get(slot as usize) else { continue };
-                let d = x - v.y;
-                let d2 = d.length_squared();
-                let (cos_y, cos_x) = (v.n.dot(d), -n.dot(d));
-                if !(cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0) {
+                let g = clamped_g(v, x, n, g_max);
+                if g <= 0.0 {
                     continue;
                 }
-                let g = (cos_y * cos_x / (d2 * d2)).min(g_max);
                 let visible = vis.visible(slot as usize, x, n);
                 if visible > 0.0 {
                     sum += v.flux * (g * visible / p);

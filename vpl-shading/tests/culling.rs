@@ -8,32 +8,14 @@
 //! (a true estimator fails one in about 16,000; the blocks of a scene
 //! together about one in 500). The seeds are fixed.
 
-use vpl_core::image::luminance;
-use vpl_core::{Image, IndirectShader, SceneSetup, VplVisibility};
+mod common;
+
+use common::{assert_unbiased, means};
+use vpl_core::{IndirectShader, SceneSetup, VplVisibility};
 use vpl_shading::{CulledShader, ExhaustiveShader, render_gbuffer};
 use vpl_visibility::RayTraced;
 
 const FRAMES: usize = 48;
-const BLOCK: u32 = 8;
-
-/// Luminance means of the image and of its 8×8 blocks.
-fn means(img: &Image) -> Vec<f64> {
-    let (w, h) = (img.width, img.height);
-    let mut out = vec![img.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.data.len() as f64];
-    for by in (0..h).step_by(BLOCK as usize) {
-        for bx in (0..w).step_by(BLOCK as usize) {
-            let (mut s, mut k) = (0.0, 0);
-            for y in by..(by + BLOCK).min(h) {
-                for x in bx..(bx + BLOCK).min(w) {
-                    s += luminance(img.data[(y * w + x) as usize]) as f64;
-                    k += 1;
-                }
-            }
-            out.push(s / k as f64);
-        }
-    }
-    out
-}
 
 /// Culling at `bound` is unbiased on `scene_name` and skips at least `skips` of the terms.
 fn unbiased(scene_name: &str, bound: f32, skips: f64) {
@@ -57,22 +39,7 @@ fn unbiased(scene_name: &str, bound: f32, skips: f64) {
         .collect();
     eprintln!("{scene_name}, bound {bound}: {:.1} % of the terms evaluated", 100.0 * share);
     assert!(share <= 1.0 - skips, "{scene_name}: {:.1} % evaluated, the roulette must skip at least {:.0} %", 100.0 * share, 100.0 * skips);
-    for (k, &t) in truth.iter().enumerate() {
-        let xs: Vec<f64> = frames.iter().map(|f| f[k]).collect();
-        let n = xs.len() as f64;
-        let mean = xs.iter().sum::<f64>() / n;
-        let se = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        let what = if k == 0 { "the image".to_string() } else { format!("block {}", k - 1) };
-        if se == 0.0 {
-            assert!((mean - t).abs() <= 1e-6 * t.abs().max(1e-12), "{scene_name}, {what}: {mean} every frame against {t}");
-            continue;
-        }
-        let z = (mean - t) / se;
-        if k == 0 {
-            eprintln!("{scene_name}: image mean {mean:.5} ± {se:.5} against {t:.5} (z {z:+.2})");
-        }
-        assert!(z.abs() <= 4.0, "{scene_name}, {what}: {mean:.6} ± {se:.6} against {t:.6}, z = {z:.2}");
-    }
+    assert_unbiased(scene_name, &truth, &frames);
 }
 
 #[test]

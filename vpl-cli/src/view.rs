@@ -77,13 +77,6 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if v.backend.is_none() {
         pipeline.backend = vpl_render::AUTO.into();
     }
-    // The sampler's keys are checked before any window opens (an unknown
-    // sampler is the viewer's to name).
-    if registry.contains(&pipeline.sampler) {
-        registry
-            .build(&pipeline.sampler, pipeline.budget, &vpl_core::Services::cpu(), &pipeline.params)
-            .map_err(|e| sampling_line(&pipeline.sampler, &e))?;
-    }
     let options = vpl_viewer::ViewerOptions {
         window: (window.0, window.1),
         pipeline,
@@ -95,7 +88,12 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         load: vpl_scene_io::LoadOptions { allow_outside, memory_limit: None },
         ..defaults
     };
-    let s = vpl_viewer::run(options, registry).map_err(|e| e.to_string())?;
+    // The viewer checks the sampler's keys before any window opens; its
+    // refusal is said in the command line's words (keys as flags).
+    let s = vpl_viewer::run(options, registry).map_err(|e| match e {
+        vpl_viewer::ViewerError::Sampler { name, source } => sampling_line(&name, &source),
+        e => e.to_string(),
+    })?;
     if !quiet {
         eprintln!(
             "vpl: view: {} frames shown, {:.2} frames/s after the first, {} of them composed on the device, render {}x{}; {}",

@@ -12,6 +12,16 @@ pub enum ViewerError {
     /// not write.
     #[error(transparent)]
     Core(#[from] vpl_core::CoreError),
+    /// The pipeline's sampler refused its parameters (a key it does not
+    /// read, a value out of range).
+    #[error("{source}")]
+    Sampler {
+        /// The sampler's name.
+        name: String,
+        /// What the registry said.
+        #[source]
+        source: Box<vpl_sampling::SamplingError>,
+    },
     /// A sampler name the registry does not hold.
     #[error("unknown sampler `{name}` (the registry holds {known})")]
     UnknownSampler {

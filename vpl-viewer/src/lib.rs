@@ -169,7 +169,9 @@ pub fn run(options: ViewerOptions, registry: &Registry) -> Result<Summary, Viewe
     // The pipeline's sampler takes its parameters (a key it does not read
     // is an error), checked before any window opens.
     let p = &options.pipeline;
-    registry.build(&p.sampler, p.budget, &vpl_core::Services::cpu(), &p.params).map_err(|e| ViewerError::Invalid(e.to_string()))?;
+    registry
+        .build(&p.sampler, p.budget, &vpl_core::Services::cpu(), &p.params)
+        .map_err(|e| ViewerError::Sampler { name: p.sampler.clone(), source: Box::new(e) })?;
     if options.pipeline.backend != vpl_render::AUTO {
         app::backends().entry(&options.pipeline.backend).map_err(|e| ViewerError::Backend(e.to_string()))?;
     }

@@ -12,6 +12,8 @@
 //! build runs in parallel, and the result is the same bit for bit on any
 //! number of threads. When a few lights change (SMC moves at most M_max a
 //! frame), [`LightTree::refit`] fits only their ancestors again.
+//! [`LightTree::cut`] and [`LightTree::sample_below`] are a stochastic
+//! lightcut's two steps, under an importance the caller gives.
 //!
 //! ```
 //! use vpl_lighttree::{Child, Emitter, LightTree};
@@ -35,6 +37,7 @@
 #![warn(missing_docs)]
 
 mod cone;
+mod cut;
 mod morton;
 mod tree;
 

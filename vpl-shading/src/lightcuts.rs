@@ -72,7 +72,9 @@ impl IndirectShader for LightcutShader {
         // More slots than a tree addresses (2³¹) cannot come from a VplSet
         // that fits in memory; such a set shades to black rather than panic.
         let Ok(tree) = LightTree::build(&slots) else { return img };
-        let Some(root) = tree.root() else { return img };
+        if tree.root().is_none() {
+            return img;
+        }
         let g_max = self.clamp.map_or(f32::INFINITY, |c| c.g_max);
         let cut = self.cut.max(1);
         img.data.par_iter_mut().enumerate().for_each(|(pixel, out)| {
@@ -84,33 +86,11 @@ impl IndirectShader for LightcutShader {
             }
             let (x, n) = (s.p, s.n);
             let importance = |c: Child| node_importance(&tree.bounds(c, &slots), x, n);
-            let nodes = select_cut(&tree, root, cut, &importance);
             let mut rng = stream(self.seed, frame, Purpose::LIGHTCUT, pixel as u64);
             let mut sum = Vec3::ZERO;
-            for (node, _) in nodes {
-                // Walk down to one light, each child by its importance.
-                let (mut at, mut p) = (node, 1.0f32);
-                while let Child::Node(i) = at {
-                    let [a, b] = tree.node(i).children();
-                    let (ia, ib) = (importance(a), importance(b));
-                    let total = ia + ib;
-                    if total.is_nan() || total <= 0.0 || total.is_infinite() {
-                        p = 0.0;
-                        break;
-                    }
-                    let pa = ia / total;
-                    if rng.next_f32() < pa {
-                        at = a;
-                        p *= pa;
-                    } else {
-                        at = b;
-                        p *= 1.0 - pa;
-                    }
-                }
-                let Child::Slot(slot) = at else { continue };
-                if p <= 0.0 {
-                    continue;
-                }
+            for (node, _) in tree.cut(cut, importance) {
+                // One light of the node, walked down by importance.
+                let Some((slot, p)) = tree.sample_below(node, importance, || rng.next_f32()) else { continue };
                 let Some(v) = vpls.get(slot as usize) else { continue };
                 let g = clamped_g(v, x, n, g_max);
                 if g <= 0.0 {
@@ -125,36 +105,6 @@ impl IndirectShader for LightcutShader {
         });
         img
     }
-}
-
-/// The cut at `x`: from the root, the node of largest importance split
-/// until `n` nodes are held or none left to split; nodes of no importance
-/// (no light of theirs reaches x) are dropped. Ties go to the earlier node,
-/// so the cut depends on x alone.
-fn select_cut(tree: &LightTree, root: Child, n: usize, importance: &dyn Fn(Child) -> f32) -> Vec<(Child, f32)> {
-    let mut cut: Vec<(Child, f32)> = Vec::with_capacity(n + 1);
-    let r = importance(root);
-    if r > 0.0 {
-        cut.push((root, r));
-    }
-    while cut.len() < n {
-        let mut best: Option<usize> = None;
-        for (k, &(c, w)) in cut.iter().enumerate() {
-            if matches!(c, Child::Node(_)) && best.is_none_or(|b| w > cut[b].1) {
-                best = Some(k);
-            }
-        }
-        let Some(k) = best else { break };
-        let Child::Node(i) = cut[k].0 else { break };
-        cut.swap_remove(k);
-        for c in tree.node(i).children() {
-            let w = importance(c);
-            if w > 0.0 {
-                cut.push((c, w));
-            }
-        }
-    }
-    cut
 }
 
 /// cos(max(0, θ_a − θ_b)) from the sines and cosines of both angles.

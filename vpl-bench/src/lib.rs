@@ -42,6 +42,7 @@ pub mod figures;
 pub mod georgiev;
 #[cfg(feature = "gpu")]
 pub mod gpu_bench;
+pub mod manylights;
 pub mod pipeline;
 pub mod plot;
 pub mod progressive;

@@ -145,7 +145,13 @@ pub fn line_chart_png(name: &str, chart: &Chart, series: &[Series]) -> Result<Ve
                     let drawn = c.draw_series(LineSeries::new(pts.clone(), style)).map_err(|e| draw(&e))?;
                     // A series without a label (another run of a method already named) stays out of the legend.
                     if !s.label.is_empty() {
-                        drawn.label(s.label.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(3)));
+                        // The legend's line as the series draws it: as wide, with a marker if its points have them.
+                        let (width, marker) = (if s.bold { 3 } else { 2 }, if s.markers { 4 } else { 0 });
+                        drawn.label(s.label.clone()).legend(move |(x, y)| {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (20, 0)], col.stroke_width(width))
+                                + Circle::new((10, 0), marker, col.filled())
+                        });
                     }
                     if s.markers {
                         c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, col.filled()))).map_err(|e| draw(&e))?;

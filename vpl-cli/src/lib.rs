@@ -23,6 +23,7 @@ mod energy;
 mod export_scene;
 mod figures;
 mod georgiev;
+mod manylights;
 mod merge;
 mod output;
 mod progressive_figures;
@@ -239,6 +240,11 @@ struct ProgressiveArgs {
     /// Caustic photon paths per pass.
     #[arg(long, default_value_t = 100_000)]
     caustic_paths: usize,
+    /// How the VPLs are gathered at the eye vertices: exhaustive (every VPL), or lightcuts:N
+    /// (N VPLs sampled through a light tree over the pass's VPLs, unbiased: for many VPL
+    /// paths, e.g. --vpl-paths 65536).
+    #[arg(long, default_value = "exhaustive")]
+    gather: vpl_progressive::Gathering,
     /// Stochastic VPL culling against 256 Halton-chosen eye vertices.
     #[arg(long, value_enum, default_value_t = CullingArg::Unbiased)]
     culling: CullingArg,
@@ -363,6 +369,10 @@ enum Command {
     /// checkpoints of each scene's sequence (the sampler stepped along it), with the share of its
     /// light the default clamp removes; energy.md and energy.json.
     Energy(energy::Args),
+    /// The many-light study: VPL sources (SMC 2K, IR 64K, IR 1M) gathered interleaved,
+    /// exhaustively and by stochastic lightcuts; RMSE against the path tracer over wall time per
+    /// scene, and |E|, |E′| on a Table 1 sequence; manylights.md, .json and plots.
+    Manylights(manylights::Args),
     /// Merge the unit files of a sharded Table 1 run (all shards done) into its tables and plots.
     Merge(merge::Args),
     /// Figs. 6-8 of the progressive renderer (Dammertz et al. 2010): error against passes on a
@@ -601,6 +611,7 @@ fn dispatch(cli: Cli, registry: &Registry) -> Res<()> {
         Command::Table1(a) => table1::run(a, registry),
         Command::Table2(a) => table2::run(a, registry),
         Command::Energy(a) => energy::run(a, registry),
+        Command::Manylights(a) => manylights::run(a, registry),
         Command::Figures(a) => figures::run(a, registry),
         Command::Merge(a) => merge::run(a, registry),
         Command::ProgressiveFigures(a) => progressive_figures::run(a, registry),

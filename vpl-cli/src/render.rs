@@ -289,7 +289,8 @@ fn render_progressive(job: Job<'_>, policy: vpl_core::MaterialPolicy, p: &Progre
     };
     let (sc, mut camera) = load_frame(scene, frame, size)?;
     let sc = with_policy(sc, policy, "the progressive renderer (--materials diffuse)");
-    let estimate = vpl_render::MemoryEstimate::progressive(&sc, camera.resolution, p.caustic_paths, p.vpl_paths, max_depth);
+    let vpl_bytes = vpl_progressive::bytes_per_vpl(p.gather);
+    let estimate = vpl_render::MemoryEstimate::progressive(&sc, camera.resolution, p.caustic_paths, p.vpl_paths, max_depth, vpl_bytes);
     check_memory(&estimate, memory_limit)?;
     if p.lens_radius.is_some() || p.focus_distance.is_some() {
         let r = p.lens_radius.unwrap_or(camera.lens_radius);
@@ -307,6 +308,7 @@ fn render_progressive(job: Job<'_>, policy: vpl_core::MaterialPolicy, p: &Progre
         max_depth,
         vpl_paths: p.vpl_paths,
         caustic_paths: p.caustic_paths,
+        gathering: p.gather,
         culling,
         clamp: clamp.unwrap_or(vpl_render::Clamp::Auto).resolve(vpls, &sc, &camera),
         projection_maps: !p.no_projection_maps,

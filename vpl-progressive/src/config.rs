@@ -20,6 +20,54 @@ pub enum Culling {
     Deterministic,
 }
 
+/// How the pass's VPLs are gathered at each eye vertex (§5.1, Fig. 3c).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Gathering {
+    /// Every stored VPL at every eye vertex (the paper's).
+    Exhaustive,
+    /// A stochastic lightcut a vertex (`crate::lightcut`): `cut` VPLs
+    /// sampled through a light tree over the pass's VPLs, each term divided
+    /// by its probability (and `cut` of the sun's and the sky's VPLs, drawn
+    /// uniformly).
+    /// Unbiased against [`Gathering::Exhaustive`]; what lets a pass hold
+    /// 64K–1M VPLs (many light paths) at a cost that grows with `cut`.
+    Lightcuts {
+        /// Surface VPLs sampled a vertex (at least 1).
+        cut: usize,
+    },
+}
+
+impl Gathering {
+    /// The cut of `lightcuts` without a number.
+    pub const DEFAULT_CUT: usize = 32;
+}
+
+impl std::fmt::Display for Gathering {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Gathering::Exhaustive => f.write_str("exhaustive"),
+            Gathering::Lightcuts { cut } => write!(f, "lightcuts:{cut}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Gathering {
+    type Err = ProgressiveError;
+    /// `exhaustive`, `lightcuts` (cut [`Gathering::DEFAULT_CUT`]) or `lightcuts:N`, N ≥ 1.
+    fn from_str(s: &str) -> Result<Gathering, ProgressiveError> {
+        match s {
+            "exhaustive" => Ok(Gathering::Exhaustive),
+            "lightcuts" => Ok(Gathering::Lightcuts { cut: Gathering::DEFAULT_CUT }),
+            _ => match s.strip_prefix("lightcuts:").map(str::parse::<usize>) {
+                Some(Ok(cut)) if cut >= 1 => Ok(Gathering::Lightcuts { cut }),
+                _ => {
+                    Err(ProgressiveError::Config(format!("gathering '{s}' must be 'exhaustive', 'lightcuts' or 'lightcuts:N' with N ≥ 1")))
+                }
+            },
+        }
+    }
+}
+
 /// Which bins a caustic photon falls into (§5.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BinRule {
@@ -112,6 +160,8 @@ pub struct ProgressiveConfig {
     pub bins: BinRule,
     /// Which path classes the image gets.
     pub techniques: Techniques,
+    /// How the VPLs are gathered at the eye vertices.
+    pub gathering: Gathering,
     /// Seed of every random stream.
     pub seed: u64,
 }
@@ -132,6 +182,7 @@ impl Default for ProgressiveConfig {
             spectral: true,
             bins: BinRule::Closest,
             techniques: Techniques::ALL,
+            gathering: Gathering::Exhaustive,
             seed: 0,
         }
     }
@@ -158,6 +209,9 @@ impl ProgressiveConfig {
         }
         if self.map_size.0 < 2 || self.map_size.1 < 4 || self.map_size.0 * self.map_size.1 > 1 << 22 {
             return bad("projection maps need 2..=4M cells, at least 2 rows and 4 columns");
+        }
+        if self.gathering == (Gathering::Lightcuts { cut: 0 }) {
+            return bad("a lightcut gathers at least one VPL");
         }
         if let Some(c) = self.clamp {
             if !(c.g_max > 0.0) {

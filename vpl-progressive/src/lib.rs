@@ -57,10 +57,26 @@ pub mod eye;
 pub mod gather;
 pub mod histogram;
 pub mod light_paths;
+pub mod lightcut;
 pub mod projection;
 pub mod renderer;
 pub mod vertex;
 
-pub use config::{BinRule, Culling, ProgressiveConfig, Techniques};
+pub use config::{BinRule, Culling, Gathering, ProgressiveConfig, Techniques};
 pub use error::ProgressiveError;
 pub use renderer::{PassStats, Progressive, specular_bounds};
+
+/// Bytes a pass holds for each of its VPLs under `gathering`: the VPL as
+/// traced and as stored (culling keeps a second list), and with lightcuts
+/// its light-tree slot and share of the tree's nodes (one inner node a
+/// light, and the parent links). What a memory estimate multiplies by the
+/// pass's VPLs (`vpl_render::MemoryEstimate::progressive`).
+pub fn bytes_per_vpl(gathering: Gathering) -> u64 {
+    let vpl = 2 * std::mem::size_of::<light_paths::PassVpl>() as u64;
+    match gathering {
+        Gathering::Exhaustive => vpl,
+        Gathering::Lightcuts { .. } => {
+            vpl + (std::mem::size_of::<Option<vpl_lighttree::Emitter>>() + std::mem::size_of::<vpl_lighttree::Node>() + 8) as u64
+        }
+    }
+}

@@ -1,11 +1,12 @@
 //! The rendering pass (§3, Fig. 2) and the accumulation buffer.
 
-use crate::config::{Culling, ProgressiveConfig};
+use crate::config::{Culling, Gathering, ProgressiveConfig};
 use crate::error::ProgressiveError;
 use crate::eye::{EyePath, EyeVertex, pixel_angle, trace_eye};
 use crate::gather::{contribution, sees};
 use crate::histogram::{Bins, Photons, SourceResult, trace_photons};
 use crate::light_paths::{Emitter, PassVpl, trace_light_path};
+use crate::lightcut::PassTree;
 use crate::projection::{SpecularBound, SpecularSet};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -232,14 +233,24 @@ impl<'s> Progressive<'s> {
         let max_vertices = cfg.max_depth.saturating_sub(1);
         if !stored.is_empty() {
             let vpl_for = |v: &EyeVertex| if v.specular == 0 { cfg.techniques.vpl } else { cfg.techniques.specular_gathering };
+            let tree = match cfg.gathering {
+                Gathering::Lightcuts { cut } => Some((PassTree::build(scene, &stored), cut)),
+                Gathering::Exhaustive => None,
+            };
             let lit: Vec<Vec3> = eye
                 .par_iter()
-                .map(|e| match &e.vertex {
-                    Some(v) if vpl_for(v) => stored
-                        .iter()
-                        .filter(|l| v.specular + 1 + l.depth <= max_vertices)
-                        .map(|l| contribution(scene, v, l, cfg.clamp))
-                        .sum(),
+                .enumerate()
+                .map(|(pixel, e)| match &e.vertex {
+                    Some(v) if vpl_for(v) => {
+                        let keep = |l: &PassVpl| v.specular + 1 + l.depth <= max_vertices;
+                        match &tree {
+                            Some((tree, cut)) => {
+                                let mut rng = stream(cfg.seed, pass, Purpose::LIGHTCUT, pixel as u64);
+                                tree.gather(scene, v, &stored, *cut, cfg.clamp, keep, &mut rng)
+                            }
+                            None => stored.iter().filter(|l| keep(l)).map(|l| contribution(scene, v, l, cfg.clamp)).sum(),
+                        }
+                    }
                     _ => Vec3::ZERO,
                 })
                 .collect();

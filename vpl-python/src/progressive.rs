@@ -16,10 +16,12 @@ use vpl_progressive::{Progressive, ProgressiveConfig};
 /// returns `(image, stderr)`, float32 (height, width, 3): the accumulation
 /// buffer's mean and its per-pixel standard error over passes.
 /// `vpl_paths` and `caustic_paths` are per pass (the paper's 16 and
-/// 100,000). Releases the GIL; Ctrl-C stops between passes (raising
+/// 100,000). `gather="lightcuts:N"` gathers the VPLs at each eye vertex
+/// by a stochastic lightcut of N (unbiased; for many `vpl_paths`) instead
+/// of every VPL (`"exhaustive"`). Releases the GIL; Ctrl-C stops between passes (raising
 /// KeyboardInterrupt); `progress=True` shows a tqdm bar over passes.
 #[pyfunction]
-#[pyo3(signature = (scene, passes = 64, size = None, max_depth = 5, vpl_paths = 16, caustic_paths = 100_000, seed = 0, progress = false))]
+#[pyo3(signature = (scene, passes = 64, size = None, max_depth = 5, vpl_paths = 16, caustic_paths = 100_000, gather = "exhaustive", seed = 0, progress = false))]
 #[allow(clippy::too_many_arguments)] // the Python signature: keyword arguments with defaults
 pub fn render_progressive<'py>(
     py: Python<'py>,
@@ -29,6 +31,7 @@ pub fn render_progressive<'py>(
     max_depth: u32,
     vpl_paths: usize,
     caustic_paths: usize,
+    gather: &str,
     seed: u64,
     progress: bool,
 ) -> PyResult<ImageAndError<'py>> {
@@ -36,7 +39,8 @@ pub fn render_progressive<'py>(
         return Err(vpl_err("passes must be at least 1"));
     }
     let camera = scene.camera_at(size)?;
-    let config = ProgressiveConfig { max_depth, vpl_paths, caustic_paths, seed, ..Default::default() };
+    let gathering = gather.parse().map_err(vpl_err)?;
+    let config = ProgressiveConfig { max_depth, vpl_paths, caustic_paths, gathering, seed, ..Default::default() };
     let sc = scene.scene.clone();
     let mut r = Progressive::new(&sc, camera, config).map_err(vpl_err)?;
     let done = AtomicU64::new(0);

@@ -67,6 +67,13 @@ def test_the_progressive_renderer_runs_from_python(cornell):
     assert np.all(np.abs(ratio - 1) < 0.1), ratio
     with pytest.raises(vpl.VplError, match="passes"):
         vpl.render_progressive(cornell, passes=0)
+    # Many VPL paths gathered by a lightcut of 8 a vertex: the same light
+    # (unbiased against every VPL; the Rust tests hold it to 4 s.e.).
+    lc, _ = vpl.render_progressive(cornell, passes=16, size=(24, 24), vpl_paths=512, caustic_paths=1000, gather="lightcuts:8")
+    ratio = lc.mean(axis=(0, 1)) / pt.mean(axis=(0, 1))
+    assert np.all(np.abs(ratio - 1) < 0.1), ratio
+    with pytest.raises(vpl.VplError, match="lightcuts:N"):
+        vpl.render_progressive(cornell, passes=1, gather="lightcuts:0")
 
 
 def test_track_holds_pixels_against_the_render(cornell):

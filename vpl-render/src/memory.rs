@@ -146,18 +146,22 @@ impl MemoryEstimate {
 
     /// The progressive renderer at `size`: its accumulated image and error
     /// buffers, the pass's caustic photons (up to `max_depth` a path) and its
-    /// VPLs.
-    pub fn progressive(scene: &Scene, size: (u32, u32), caustic_paths: usize, vpl_paths: usize, max_depth: u32) -> MemoryEstimate {
+    /// VPLs (up to `max_depth` a path), `vpl_bytes` each as the renderer
+    /// holds them (`vpl_progressive::bytes_per_vpl`).
+    pub fn progressive(
+        scene: &Scene,
+        size: (u32, u32),
+        caustic_paths: usize,
+        vpl_paths: usize,
+        max_depth: u32,
+        vpl_bytes: u64,
+    ) -> MemoryEstimate {
         let mut e = Self::scene(scene);
         let px = size.0 as u64 * size.1 as u64;
         e.add(format!("images: {}×{} × 8 RGB buffers", size.0, size.1), px * 8 * 12, &["size"]);
         let d = max_depth.max(1) as u64;
         e.add(format!("caustic photons: {caustic_paths} paths × {d} × 48 B"), caustic_paths as u64 * d * 48, &["caustic-paths"]);
-        e.add(
-            format!("VPLs: {vpl_paths} paths × {d} × {} B", size_of::<Vpl>()),
-            vpl_paths as u64 * d * size_of::<Vpl>() as u64,
-            &["vpl-paths"],
-        );
+        e.add(format!("VPLs: {vpl_paths} paths × {d} × {vpl_bytes} B"), vpl_paths as u64 * d * vpl_bytes, &["vpl-paths"]);
         e.sorted()
     }
 }

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The folders of `results/` whose PNG files are plots worth committing.
-const PLOT_FOLDERS: [&str; 4] = ["table1/", "georgiev/", "figures/", "progressive/"];
+const PLOT_FOLDERS: [&str; 5] = ["table1/", "georgiev/", "figures/", "progressive/", "manylights/"];
 
 /// The largest PNG copied into `docs/reproduction/` (a chart is 20–80 KB).
 pub const MAX_PNG_BYTES: u64 = 200 * 1024;

@@ -5,6 +5,8 @@
 //!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Figs. 6-8 of the
 //!   progressive renderer (Dammertz et al. 2010, `results/progressive/`), Georgiev's RR experiment,
 //!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
+//!   the many-light study (`results/manylights/`: SMC 2K, IR 64K and IR 1M gathered
+//!   interleaved, exhaustively and by stochastic lightcuts, error over wall time),
 //!   and `results/README.md` linking all of it. `--shard I/N` runs shard I of Table 1's units
 //!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
 //!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
@@ -126,7 +128,8 @@ fn real_scene_gallery(vpl: &Path, dir: &Path, profile: &Profile) -> Result<Strin
     md.push('\n');
     Ok(md)
 }
-const JOBS: [&str; 10] = ["scenes", "references", "validation", "georgiev", "table1", "table2", "energy", "fig8", "fig10", "progressive"];
+const JOBS: [&str; 11] =
+    ["scenes", "references", "validation", "georgiev", "table1", "table2", "energy", "fig8", "fig10", "progressive", "manylights"];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -144,7 +147,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 }
 
 fn usage() -> &'static str {
-    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,energy,fig8,fig9,fig10,progressive] \
+    "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,energy,fig8,fig9,fig10,progressive,manylights] \
      [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] [--docs] | docs | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
@@ -241,6 +244,8 @@ struct Profile {
     energy: (u32, u32),
     figures: &'static [&'static str],
     progressive: &'static [&'static str],
+    /// `vpl manylights`: image size, seconds a configuration, reference and truth samples.
+    manylights: &'static [&'static str],
 }
 
 const QUICK: Profile = Profile {
@@ -284,6 +289,7 @@ const QUICK: Profile = Profile {
         "--seconds",
         "10",
     ],
+    manylights: &["--size", "96x72", "--seconds", "8", "--spp", "4096", "--truth-spp", "16384"],
 };
 
 const FULL: Profile = Profile {
@@ -327,6 +333,7 @@ const FULL: Profile = Profile {
         "--seconds",
         "180",
     ],
+    manylights: &["--size", "320x240", "--seconds", "120", "--spp", "32768", "--truth-spp", "262144"],
 };
 
 /// Folder of the README sections each job leaves (so `cargo xtask merge` can rebuild the README).
@@ -373,6 +380,7 @@ Each section comes from the newest run of its job; the wall times below are of t
 - [Figs. 8 and 9](figures/fig8.md): one frame by path tracing and by VPLs; shadow-map resolutions\n\
 - [Fig. 10](figures/fig10.md): error against the VPL budget\n\
 - [Progressive](progressive/progressive.md): Figs. 6-8 of Dammertz et al., error against passes and equal time against path tracing\n\
+- [Many lights](manylights/manylights.md): SMC 2K against IR 64K and 1M, gathered interleaved, exhaustively and by stochastic lightcuts, error over wall time\n\
 - [Georgiev](georgiev/georgiev.md), [validation](validation/cornell_validation.md), path-traced references, the scene gallery\n\n";
 
 fn reproduce(args: &[String]) -> Result<(), String> {
@@ -603,6 +611,18 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             fix_links(body, "progressive/")
         );
         save_section("progressive", &md, Some(t.elapsed().as_secs_f64()))?;
+    }
+    if job("manylights") {
+        let t = Instant::now();
+        eprintln!("xtask: [manylights] SMC 2K, IR 64K and IR 1M gathered interleaved, exhaustively and by lightcuts, at equal time");
+        let dir = results.join("manylights");
+        let mut c = Command::new(&vpl);
+        c.current_dir(root()).arg("manylights").args(profile.manylights).args(["--backend", &backend]).arg("--out").arg(&dir);
+        c.stdout(std::process::Stdio::null());
+        run(c, "vpl manylights")?;
+        let text = std::fs::read_to_string(dir.join("manylights.md")).map_err(|e| e.to_string())?;
+        let md = format!("## Many lights at equal time (`manylights/`)\n\n{}\n", fix_links(&text.replace("### ", "#### "), "manylights/"));
+        save_section("manylights", &md, Some(t.elapsed().as_secs_f64()))?;
     }
     let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     save_section(

@@ -145,6 +145,7 @@ def render_progressive(
     max_depth: int = 5,
     vpl_paths: int = 16,
     caustic_paths: int = 100000,
+    gather: str = "exhaustive",
     seed: int = 0,
     progress: bool = False,
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...

@@ -183,7 +183,7 @@ impl Backend for GpuBackend {
                 Box::new(s)
             }
             // No device twin yet: the host's, over a G-buffer read back.
-            ShadingSpec::Lightcuts { cut } => Box::new(vpl_shading::LightcutShader::new(cut as usize, clamp, seed)),
+            ShadingSpec::Lightcuts { cut } => Box::new(crate::GpuLightcutShader::new(self.gpu.clone(), cut as usize, clamp, seed)),
             ShadingSpec::Culled { bound } => Box::new(vpl_shading::CulledShader::new(bound, clamp, seed)),
         })
     }

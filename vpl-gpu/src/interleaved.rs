@@ -157,7 +157,7 @@ impl GpuInterleavedShader {
         self.kernels.get_or_insert_with(|| {
             let r = Binding::Read;
             let gather_layout = layout(ctx, "gather", &[Binding::Uniform, r, r, r, r, r, r, r, Binding::ReadWrite]);
-            let source = format!("{BVH_WGSL}\n{}", include_str!("interleaved.wgsl"));
+            let source = format!("{BVH_WGSL}\n{}\n{}", include_str!("interleaved.wgsl"), include_str!("vpl_visible.wgsl"));
             let gather = pipeline(ctx, "gather", &source, "gather", &[&scene_layout(ctx), &gather_layout]);
             let modulate_layout = layout(ctx, "modulate", &[Binding::Uniform, r, r, Binding::ReadWrite]);
             let modulate = pipeline(ctx, "modulate", include_str!("modulate.wgsl"), "main", &[&modulate_layout]);

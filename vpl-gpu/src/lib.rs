@@ -11,6 +11,7 @@
 //! | [`GpuShadowMaps`]: paraboloid maps of moved slots, one ray per texel | `vpl_visibility::ShadowMaps` | `VplVisibility` |
 //! | [`GpuRayTraced`]: shadow rays in the shading kernel | `vpl_visibility::RayTraced` | `VplVisibility` |
 //! | [`GpuInterleavedShader`]: 4×4 interleaved (or exhaustive) gathering, clamp, filter, albedo | `InterleavedShader`, `ExhaustiveShader` | `IndirectShader` |
+//! | [`GpuLightcutShader`]: stochastic lightcuts, the cut and walk of a host-built `vpl_lighttree` tree with the CPU's streams, shadow maps or rays | `vpl_shading::LightcutShader` | `IndirectShader` |
 //! | [`GpuCrossBilateral`] | `vpl_shading::CrossBilateral` | `apply` |
 //! | [`GpuRadiosity`]: path-traced L(y), NEE + MIS, the CPU's PCG32 streams | `vpl_pathtrace::PathRadiosity` | `RadiosityEstimator` |
 //! | [`Gpu::finish_frame`]: emission (the sky at misses) and direct light, the CPU's light samples and streams | `vpl_shading::direct_light` and the frame's emission | `IndirectShader::finish_on_device` |
@@ -104,6 +105,7 @@ mod frame;
 mod gbuffer;
 mod interleaved;
 pub mod kernel;
+mod lightcuts;
 mod neighbours;
 mod radiosity;
 mod raycast;
@@ -120,6 +122,7 @@ pub use filter::GpuCrossBilateral;
 pub use frame::{DeviceFrame, Frames};
 pub use gbuffer::{DeviceGBuffer, GpuGBufferRenderer};
 pub use interleaved::{GpuInterleavedShader, GpuShadeTimings};
+pub use lightcuts::{GpuLightcutShader, MAX_CUT};
 pub use neighbours::{MAX_K, Neighbours};
 pub use radiosity::GpuRadiosity;
 pub use raycast::{GpuRayCaster, GpuRays};

@@ -52,6 +52,24 @@ impl LightcutShader {
     pub fn new(cut: usize, clamp: Option<GeometryClamp>, seed: u64) -> LightcutShader {
         LightcutShader { clamp, cut: cut.max(1), seed, frame: 0 }
     }
+
+    /// The frame number the next shade draws its streams with, and counts
+    /// it as drawn: what a twin on another device (vpl-gpu's) calls for
+    /// each shade it runs itself, so that its streams stay this shader's.
+    pub fn take_frame(&mut self) -> u64 {
+        let frame = self.frame;
+        self.frame += 1;
+        frame
+    }
+
+    /// The light tree a shade of `vpls` cuts, and the tree's view of each
+    /// slot (position, normal, the luminance of the flux as power); `None`
+    /// when no tree can be built (more slots than it addresses).
+    pub fn tree(vpls: &VplSet) -> Option<(LightTree, Vec<Option<Emitter>>)> {
+        let slots: Vec<Option<Emitter>> =
+            vpls.slots().iter().map(|s| s.map(|v| Emitter { p: v.y, n: v.n, power: luminance(v.flux) })).collect();
+        LightTree::build(&slots).ok().map(|t| (t, slots))
+    }
 }
 
 impl IndirectShader for LightcutShader {
@@ -64,14 +82,11 @@ impl IndirectShader for LightcutShader {
     }
 
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
-        let frame = self.frame;
-        self.frame += 1;
-        let slots: Vec<Option<Emitter>> =
-            vpls.slots().iter().map(|s| s.map(|v| Emitter { p: v.y, n: v.n, power: luminance(v.flux) })).collect();
+        let frame = self.take_frame();
         let mut img = Image::new(gbuf.width, gbuf.height);
         // More slots than a tree addresses (2³¹) cannot come from a VplSet
         // that fits in memory; such a set shades to black rather than panic.
-        let Ok(tree) = LightTree::build(&slots) else { return img };
+        let Some((tree, slots)) = Self::tree(vpls) else { return img };
         if tree.root().is_none() {
             return img;
         }

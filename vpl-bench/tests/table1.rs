@@ -75,8 +75,10 @@ fn a_tiny_run_merges_and_two_shards_give_the_same_bits() {
 
     let split = fresh("split");
     let a = table1::run(&reg, &spec, &split, Shard { index: 0, count: 2 }, &mut |_| {}).unwrap();
-    // Half the units are missing before the second shard runs.
+    // Half the units are missing before the second shard runs, and the status says whose.
     assert!(matches!(table1::merge(&split), Err(Table1Error::Missing { missing: 3, total: 7, .. })));
+    let st = table1::status(&split, 2).unwrap();
+    assert_eq!(st.iter().map(|s| (s.shard.index, s.done, s.total)).collect::<Vec<_>>(), [(0, 4, 4), (1, 0, 3)]);
     let b = table1::run(&reg, &spec, &split, Shard { index: 1, count: 2 }, &mut |_| {}).unwrap();
     assert_eq!((a.ran, b.ran), (4, 3));
     // A merge that fails on its last output writes none of them (the old

@@ -1,7 +1,7 @@
 //! `cargo xtask …`: the toolkit's jobs.
 //!
 //! - `cargo xtask reproduce [--quick | --full] [--only LIST] [--scene S,..] [--methods M,..]
-//!   [--frames A..B] [--shard I/N] [--docs]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
+//!   [--frames A..B] [--seeds N] [--size WxH] [--truth-spp N] [--shard I/N] [--docs]`: the SMC paper's Table 1 with Fig. 7 (`results/table1/`),
 //!   Table 2 (`results/table2/`), Figs. 8, 9 and 10 (`results/figures/`), Figs. 6-8 of the
 //!   progressive renderer (Dammertz et al. 2010, `results/progressive/`), Georgiev's RR experiment,
 //!   the scene gallery, path-traced references, the path tracer's validation against Mitsuba 3,
@@ -12,6 +12,9 @@
 //!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
 //!   tracing, the figures and Georgiev's experiment stay on the CPU.
 //!   `--docs` then writes `docs/reproduction.md` and its plots from `results/` (module `docs`).
+//!   `--slurm [--shards N] [--partition P] [--time T] [--cpus-per-task C] [--gpus G] [--dry-run]`
+//!   submits Table 1 as a Slurm job array and a merge job after it instead (module `slurm`);
+//!   `--slurm --status` reports the units done per shard.
 //! - `cargo xtask docs`: writes `docs/reproduction.md` from `results/` as it is (after a merge).
 //! - `cargo xtask merge [DIR]`: merges the shards of a Table 1 run (default `results/table1`).
 //! - `cargo xtask test [--cargo-test] [ARGS]`: the whole test suite, as CI runs it: under
@@ -30,6 +33,7 @@
 //!   executions and findings, writes findings to `target/fuzz-findings/`.
 
 mod docs;
+mod slurm;
 mod test;
 
 use std::path::{Path, PathBuf};
@@ -148,7 +152,7 @@ fn run(mut c: Command, what: &str) -> Result<(), String> {
 
 fn usage() -> &'static str {
     "usage: cargo xtask <reproduce [--quick | --full] [--only scenes,references,validation,georgiev,table1,fig7,table2,energy,fig8,fig9,fig10,progressive,manylights] \
-     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] [--docs] | docs | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
+     [--scene S,..] [--methods M,..] [--frames A..B] [--shard I/N] [--backend cpu|gpu] [--docs] [--slurm [--shards N] [--partition P] [--time T] [--cpus-per-task C] [--gpus G] [--dry-run] | --slurm --status] | docs | merge [DIR] | test [--cargo-test] | bench-pt [--spp N] | bench-rays [--scene S,..] [--size WxH] | bench-vpl [--repeat N] \
      | bench-gpu [--scene S,..] [--size WxH] [--vpls N] [--frames N] [--out DIR] | fuzz [--seconds N] [--target T] [--seed S]>"
 }
 
@@ -175,8 +179,14 @@ fn main() -> ExitCode {
     }
 }
 
-/// Builds the `vpl` binary in release mode and returns its path.
+/// Builds the `vpl` binary in release mode and returns its path; where
+/// `VPL_BIN` names a binary, that one, unbuilt (one built elsewhere: a
+/// cluster's login node, or the test suite's debug build in CI).
 fn build_vpl() -> Result<PathBuf, String> {
+    if let Some(bin) = std::env::var_os("VPL_BIN").filter(|v| !v.is_empty()) {
+        let bin = PathBuf::from(bin);
+        return if bin.is_file() { Ok(bin) } else { Err(format!("VPL_BIN: {} is not a file", bin.display())) };
+    }
     let mut c = cargo();
     c.args(["build", "--release", "--quiet", "-p", "vpl-cli", "--bin", "vpl"]);
     run(c, "building vpl")?;
@@ -289,7 +299,7 @@ const QUICK: Profile = Profile {
         "--seconds",
         "10",
     ],
-    manylights: &["--size", "96x72", "--seconds", "8", "--spp", "4096", "--truth-spp", "16384"],
+    manylights: &["--size", "128x96", "--seconds", "8", "--spp", "4096", "--truth-spp", "16384"],
 };
 
 const FULL: Profile = Profile {
@@ -390,6 +400,9 @@ fn reproduce(args: &[String]) -> Result<(), String> {
     let mut shard: Option<String> = None;
     let mut backend = String::from("cpu");
     let mut write_docs = false;
+    let mut slurm: Option<slurm::SlurmSettings> = None;
+    let mut status = false;
+    let mut slurm_flags: Vec<String> = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -412,13 +425,21 @@ fn reproduce(args: &[String]) -> Result<(), String> {
                     }
                 }
             }
-            "--scene" | "--methods" | "--frames" => {
+            "--scene" | "--methods" | "--frames" | "--seeds" | "--size" | "--truth-spp" => {
                 let v = it.next().ok_or_else(|| format!("{a} needs a value"))?;
                 table1_args.push(a.clone());
                 table1_args.push(v.clone());
             }
             "--shard" => shard = Some(it.next().ok_or("--shard needs I/N")?.clone()),
             "--docs" => write_docs = true,
+            "--slurm" => slurm = Some(slurm::SlurmSettings { shards: 16, cpus_per_task: 16, ..Default::default() }),
+            "--status" => status = true,
+            "--dry-run" => slurm_flags.push(a.clone()),
+            "--partition" | "--time" | "--cpus-per-task" | "--gpus" | "--shards" => {
+                let v = it.next().ok_or_else(|| format!("{a} needs a value"))?;
+                slurm_flags.push(a.clone());
+                slurm_flags.push(v.clone());
+            }
             "--backend" => {
                 let b = it.next().ok_or("--backend needs cpu or gpu")?;
                 if b != "cpu" && b != "gpu" {
@@ -428,6 +449,36 @@ fn reproduce(args: &[String]) -> Result<(), String> {
             }
             other => return Err(format!("unknown argument '{other}'\n{}", usage())),
         }
+    }
+    if let Some(mut settings) = slurm {
+        let mut f = slurm_flags.iter();
+        while let Some(flag) = f.next() {
+            let mut value = || f.next().cloned().ok_or_else(|| format!("{flag} needs a value"));
+            let count = |v: String| v.parse::<u32>().map_err(|_| format!("{flag}: '{v}' is not a count"));
+            match flag.as_str() {
+                "--dry-run" => settings.dry_run = true,
+                "--partition" => settings.partition = Some(value()?),
+                "--time" => settings.time = Some(value()?),
+                "--cpus-per-task" => settings.cpus_per_task = count(value()?)?.max(1),
+                "--gpus" => settings.gpus = count(value()?)?,
+                "--shards" => settings.shards = count(value()?)?,
+                _ => {}
+            }
+        }
+        let dir = root().join("results/slurm");
+        if status {
+            return slurm_status(&dir);
+        }
+        if shard.is_some() {
+            return Err("--slurm makes the shards itself: leave out --shard".into());
+        }
+        let vpl = build_vpl()?;
+        let mut t1 = vec!["--profile".to_string(), profile.name.to_string(), "--backend".into(), backend.clone()];
+        t1.extend(table1_args.iter().cloned());
+        return slurm::submit(&root(), &vpl, &t1, &root().join("results/table1"), &dir, &settings);
+    }
+    if status || !slurm_flags.is_empty() {
+        return Err("--status, --dry-run, --partition, --time, --cpus-per-task, --gpus and --shards go with --slurm".into());
     }
     // Sharded: shard i runs its share of Table 1; shard 0 also runs every other job.
     let first_shard = shard.as_deref().is_none_or(|s| s.trim().starts_with("0/"));
@@ -643,6 +694,32 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         } else {
             docs::write(&root(), &results)?;
         }
+    }
+    Ok(())
+}
+
+/// `cargo xtask reproduce --slurm --status`: the units done per shard of the
+/// submitted run, what the queue says of its jobs, and the README's Table 1
+/// section once the merge job has written the tables.
+fn slurm_status(dir: &Path) -> Result<(), String> {
+    let (array, merge_id, shards, out) = slurm::jobs(dir)?;
+    let vpl = build_vpl()?;
+    let mut c = Command::new(&vpl);
+    c.current_dir(root()).arg("merge").arg(&out).args(["--status", "--shards", &shards.to_string()]);
+    run(c, "vpl merge --status")?;
+    let q = slurm::queue(&[&array, &merge_id]);
+    if q.trim().is_empty() {
+        println!(
+            "jobs {array} (array) and {merge_id} (merge): not in the queue (done, failed or cancelled; see {})",
+            dir.join("logs").display()
+        );
+    } else {
+        print!("{q}");
+    }
+    if out.join("table1.md").is_file() && out == root().join("results/table1") {
+        table1_section(None)?;
+        write_readme(README_HEADER)?;
+        println!("merged: {} (results/README.md updated)", out.join("table1.md").display());
     }
     Ok(())
 }

@@ -874,6 +874,34 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
     Ok((Table1Results { spec, rows: rows_out }, runs, full_estimate))
 }
 
+/// Units done and in all of one shard of a run ([`status`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShardStatus {
+    /// The shard.
+    pub shard: Shard,
+    /// Its units whose files are in the folder.
+    pub done: usize,
+    /// Its units.
+    pub total: usize,
+}
+
+/// How far each of `count` shards of the run in `dir` has come: its units
+/// whose files are written (a unit is written whole, atomically, so a
+/// file is a finished unit).
+pub fn status(dir: &Path, count: u32) -> Result<Vec<ShardStatus>, Table1Error> {
+    if count == 0 {
+        return Err(Table1Error::Invalid("a run has at least one shard".into()));
+    }
+    let spec: Table1Spec = read_json(&dir.join("spec.json"))?;
+    let mut out: Vec<ShardStatus> = (0..count).map(|index| ShardStatus { shard: Shard { index, count }, done: 0, total: 0 }).collect();
+    for (k, unit) in spec.units().into_iter().enumerate() {
+        let s = &mut out[k % count as usize];
+        s.total += 1;
+        s.done += dir.join(spec.unit_file(unit)).is_file() as usize;
+    }
+    Ok(out)
+}
+
 /// Merges the run in `dir` and writes `table1.md`, `table1.csv`,
 /// `table1.json`, `fig7_<row>.png` and `fig7.csv` there (the same bits
 /// from any sharding), and the wall times: `runs.csv` and `cost.md`.

@@ -8,7 +8,8 @@
 //! pixel. Tolerance: at least 99 % of pixels within 1e-4 relative (plus
 //! 1e-6 of the mean) of the CPU's, and image means within 1e-3 relative.
 //!
-//! Unbiasedness: the mean of 24 GPU frames (fresh streams each) against
+//! Unbiasedness, on cornell, office and Dabrovic's Sponza (where its model
+//! is present): the mean of 24 GPU frames (fresh streams each) against
 //! the exhaustive sum over the same VPLs and visibility, which has no noise:
 //! the image mean and the means of 8×8-pixel blocks within 4 standard
 //! errors of the frames' spread (p ≈ 6e-5 each).
@@ -76,8 +77,16 @@ fn gpu_lightcuts_draw_the_cpu_shaders_cuts() {
 fn gpu_lightcuts_are_unbiased_against_exhaustive_gathering() {
     let Some(ctx) = context() else { return };
     let gpu = Gpu::from_context(ctx);
-    for name in ["cornell", "office"] {
-        let setup = SceneSetup::builtin(name).unwrap();
+    // The built-ins, and Dabrovic's Sponza (66K triangles) where its model is in ../shared/scenes.
+    let sponza = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/sponza-dabrovic.toml");
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/sponza-dabrovic/sponza.obj");
+    let mut scenes = vec![("cornell", SceneSetup::builtin("cornell").unwrap()), ("office", SceneSetup::builtin("office").unwrap())];
+    if model.is_file() {
+        scenes.push(("sponza-dabrovic", vpl_scene_io::load(&sponza.to_string_lossy()).unwrap()));
+    } else {
+        eprintln!("skipped sponza-dabrovic: {} is not there", model.display());
+    }
+    for (name, setup) in scenes {
         let scene = &setup.scene;
         let (w, h) = (64u32, 48u32);
         let camera = setup.camera.with_resolution((w, h)).unwrap();

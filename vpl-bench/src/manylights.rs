@@ -257,16 +257,17 @@ fn grows_with_vpls(g: ShadingSpec) -> bool {
 }
 
 /// The predicted first-frame seconds of `gather` on `source`, from the
-/// curves already measured (`None`: no prediction, run it).
-fn predict(curves: &[Curve], source: &Source, gather: &str, grows: bool) -> Option<f64> {
+/// configurations already measured, each (VPLs, gather, median ms a frame;
+/// NaN where it did not run): `None` when there is no prediction (run it).
+fn predict<'a>(measured: impl IntoIterator<Item = (usize, &'a str, f64)>, source: &Source, gather: &str, grows: bool) -> Option<f64> {
     if !grows {
         return None;
     }
-    curves
-        .iter()
-        .filter(|c| c.gather == gather && c.predicted_s.is_none() && c.frame_ms.is_finite() && c.source.vpls < source.vpls)
-        .max_by_key(|c| c.source.vpls)
-        .map(|c| c.frame_ms / 1e3 * source.vpls as f64 / c.source.vpls as f64)
+    measured
+        .into_iter()
+        .filter(|&(vpls, g, ms)| g == gather && ms.is_finite() && vpls < source.vpls)
+        .max_by_key(|&(vpls, _, _)| vpls)
+        .map(|(vpls, _, ms)| ms / 1e3 * source.vpls as f64 / vpls as f64)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -326,7 +327,10 @@ pub fn measure(
     for source in &sources {
         for &gather in &s.gathers {
             let name = gather.to_string();
-            if let Some(p) = predict(&curves, source, &name, grows_with_vpls(gather)).filter(|&p| p > s.seconds) {
+            if let Some(p) =
+                predict(curves.iter().map(|c| (c.source.vpls, c.gather.as_str(), c.frame_ms)), source, &name, grows_with_vpls(gather))
+                    .filter(|&p| p > s.seconds)
+            {
                 progress(&format!("{} {name}: skipped, a frame would take about {p:.0} s", source.label()));
                 curves.push(Curve {
                     source: source.clone(),
@@ -469,20 +473,12 @@ pub fn temporal(
             let name = gather.to_string();
             // As the still study: a gather that grows with I is not run when
             // its frames would take longer than the budget.
-            let measured: Vec<Curve> = rows
-                .iter()
-                .map(|r| Curve {
-                    source: r.source.clone(),
-                    gather: r.gather.clone(),
-                    points: Vec::new(),
-                    frame_ms: r.frame_ms,
-                    warmup_s: f64::NAN,
-                    predicted_s: r.predicted_s,
-                    image: None,
-                })
-                .collect();
             let n = frames.len() as f64;
-            if let Some(p) = predict(&measured, source, &name, grows_with_vpls(gather)).map(|p| p * n).filter(|&p| p > budget) {
+            if let Some(p) =
+                predict(rows.iter().map(|r| (r.source.vpls, r.gather.as_str(), r.frame_ms)), source, &name, grows_with_vpls(gather))
+                    .map(|p| p * n)
+                    .filter(|&p| p > budget)
+            {
                 progress(&format!("{} {name}: skipped, the sequence would take about {p:.0} s", source.label()));
                 rows.push(TemporalRow { source: source.clone(), gather: name, error: None, frame_ms: f64::NAN, predicted_s: Some(p) });
                 continue;
@@ -702,20 +698,12 @@ mod tests {
 
     #[test]
     fn a_growing_gather_is_predicted_from_the_largest_smaller_source() {
-        let c = |vpls, ms| Curve {
-            source: Source { sampler: "ir".into(), vpls },
-            gather: "exhaustive".into(),
-            points: Vec::new(),
-            frame_ms: ms,
-            warmup_s: 0.0,
-            predicted_s: None,
-            image: None,
-        };
-        let curves = [c(1024, 100.0), c(4096, 300.0)];
+        // A smaller source that did not run (NaN) predicts nothing.
+        let measured = [(1024, "exhaustive", 100.0), (4096, "exhaustive", 300.0), (8192, "exhaustive", f64::NAN)];
         let big = Source { sampler: "ir".into(), vpls: 16384 };
-        assert_eq!(predict(&curves, &big, "exhaustive", true), Some(1.2));
-        assert_eq!(predict(&curves, &big, "exhaustive", false), None);
-        assert_eq!(predict(&curves, &big, "lightcuts:8", true), None);
+        assert_eq!(predict(measured, &big, "exhaustive", true), Some(1.2));
+        assert_eq!(predict(measured, &big, "exhaustive", false), None);
+        assert_eq!(predict(measured, &big, "lightcuts:8", true), None);
     }
 
     #[test]

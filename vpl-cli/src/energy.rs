@@ -89,19 +89,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     }
     let settings =
         EnergySettings { sampler, params, vpls, size: (w, h), seeds, seed, checkpoints, stride, settle, truth_spp: spp, max_depth };
-    let options = vpl_scene_io::LoadOptions { allow_outside, ..Default::default() };
-    // A Table 1 sequence on real geometry whose model is not here is skipped, and said so.
-    let mut skipped = Vec::new();
-    let mut setups = Vec::new();
-    for s in &scenes {
-        match vpl_bench::table1::rows::row(s) {
-            Some(row) => match row.missing() {
-                Some(why) => skipped.push(format!("{s}: {why}")),
-                None => setups.push((s.clone(), row.setup().map_err(|e| e.to_string())?)),
-            },
-            None => setups.push((s.clone(), vpl_scene_io::load_with(s, &options).map_err(|e| e.to_string())?)),
-        }
-    }
+    let (setups, skipped) = study_scenes(&scenes, allow_outside)?;
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
     let mut runs = Vec::new();

@@ -467,6 +467,28 @@ type Res<T> = Result<T, String>;
 /// the thread count, so more threads than cores only cost memory.
 const MAX_THREADS: usize = 1024;
 
+/// A scene as a study names it, and its setup.
+type Named = (String, vpl_core::SceneSetup);
+
+/// The scenes of a study (`vpl energy`, `vpl manylights`) by name: a Table 1
+/// sequence by id (skipped, and said why, where its model is not here), a
+/// built-in, or a scene file (which may name files under `allow_outside`).
+/// The loaded (name, setup) pairs, and the skipped ones' reasons.
+fn study_scenes(scenes: &[String], allow_outside: Vec<PathBuf>) -> Res<(Vec<Named>, Vec<String>)> {
+    let options = vpl_scene_io::LoadOptions { allow_outside, ..Default::default() };
+    let (mut setups, mut skipped) = (Vec::new(), Vec::new());
+    for s in scenes {
+        match vpl_bench::table1::rows::row(s) {
+            Some(row) => match row.missing() {
+                Some(why) => skipped.push(format!("{s}: {why}")),
+                None => setups.push((s.clone(), row.setup().map_err(|e| e.to_string())?)),
+            },
+            None => setups.push((s.clone(), vpl_scene_io::load_with(s, &options).map_err(|e| e.to_string())?)),
+        }
+    }
+    Ok((setups, skipped))
+}
+
 fn pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {

@@ -127,18 +127,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
             format!("--sequence: '{id}' is not a Table 1 sequence ({}, or none)", vpl_bench::table1::row_ids().join(", "))
         })?),
     };
-    let options = vpl_scene_io::LoadOptions { allow_outside, ..Default::default() };
-    let mut skipped = Vec::new();
-    let mut setups = Vec::new();
-    for s in &scenes {
-        match vpl_bench::table1::rows::row(s) {
-            Some(row) => match row.missing() {
-                Some(why) => skipped.push(format!("{s}: {why}")),
-                None => setups.push((s.clone(), row.setup().map_err(|e| e.to_string())?)),
-            },
-            None => setups.push((s.clone(), vpl_scene_io::load_with(s, &options).map_err(|e| e.to_string())?)),
-        }
-    }
+    let (setups, mut skipped) = study_scenes(&scenes, allow_outside)?;
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
     let mut studies = Vec::new();

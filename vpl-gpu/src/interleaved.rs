@@ -35,6 +35,55 @@ struct ModulateParams {
     pad: [u32; 2],
 }
 
+/// The albedo kernel every gather ends with: L = E · ρ / π
+/// (`modulate.wgsl`), as the CPU shaders multiply after gathering.
+pub(crate) struct Modulate {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl Modulate {
+    pub(crate) fn new(ctx: &crate::GpuContext) -> Modulate {
+        let r = Binding::Read;
+        let layout = layout(ctx, "modulate", &[Binding::Uniform, r, r, Binding::ReadWrite]);
+        let pipeline = pipeline(ctx, "modulate", include_str!("modulate.wgsl"), "main", &[&layout]);
+        Modulate { layout, pipeline }
+    }
+
+    /// Encodes the radiance of the `n` pixels of `e` (sums, one vec4 a
+    /// pixel) under `albedo` into a new buffer, which it returns.
+    pub(crate) fn encode(
+        &self,
+        ctx: &crate::GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        e: &wgpu::Buffer,
+        albedo: &wgpu::Buffer,
+        n: usize,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        let groups = groups_1d(ctx, n as u64, 64);
+        let mp = uniform(ctx, "modulate params", &ModulateParams { count: n as u32, row: groups.0 * 64, pad: [0; 2] });
+        let out = storage(ctx, "radiance", n as u64 * 16)?;
+        let group = bind(ctx, "modulate", &self.layout, &[&mp, e, albedo, &out]);
+        dispatch(enc, &self.pipeline, &[&group], groups);
+        Ok(out)
+    }
+}
+
+/// The slots of `vpls` as the gather kernels read them, three vec4 a slot:
+/// [y, 1 if the slot holds a VPL], [n_y, 0], [flux, 0]; an empty slot is
+/// zeros, and a set of no slots is one empty slot (a binding is never empty).
+pub(crate) fn vpl_rows(vpls: &VplSet) -> Vec<Vec4> {
+    let rows: Vec<Vec4> = vpls
+        .slots()
+        .iter()
+        .flat_map(|v| match v {
+            Some(v) => [v.y.extend(1.0), v.n.extend(0.0), v.flux.extend(0.0)],
+            None => [Vec4::ZERO; 3],
+        })
+        .collect();
+    if rows.is_empty() { vec![Vec4::ZERO; 3] } else { rows }
+}
+
 /// Milliseconds of the steps of the last [`GpuInterleavedShader`] shade,
 /// each waited for on the device. The gather and the filter are apart only
 /// under [`GpuInterleavedShader::profile`]; else `gather_ms` holds both.
@@ -55,8 +104,7 @@ pub struct GpuShadeTimings {
 struct Kernels {
     gather_layout: wgpu::BindGroupLayout,
     gather: wgpu::ComputePipeline,
-    modulate_layout: wgpu::BindGroupLayout,
-    modulate: wgpu::ComputePipeline,
+    modulate: Modulate,
 }
 
 /// [`InterleavedShader`] on the device: the same 4×4 classes, the same
@@ -159,9 +207,7 @@ impl GpuInterleavedShader {
             let gather_layout = layout(ctx, "gather", &[Binding::Uniform, r, r, r, r, r, r, r, Binding::ReadWrite]);
             let source = format!("{BVH_WGSL}\n{}\n{}", include_str!("interleaved.wgsl"), include_str!("vpl_visible.wgsl"));
             let gather = pipeline(ctx, "gather", &source, "gather", &[&scene_layout(ctx), &gather_layout]);
-            let modulate_layout = layout(ctx, "modulate", &[Binding::Uniform, r, r, Binding::ReadWrite]);
-            let modulate = pipeline(ctx, "modulate", include_str!("modulate.wgsl"), "main", &[&modulate_layout]);
-            Kernels { gather_layout, gather, modulate_layout, modulate }
+            Kernels { gather_layout, gather, modulate: Modulate::new(ctx) }
         })
     }
 
@@ -203,15 +249,7 @@ impl GpuInterleavedShader {
         let (_, b_slots, b_offsets) = self.subsets.as_ref().expect("uploaded");
         let g = gpu.device_gbuffer(gbuf)?;
         let n = gbuf.width as usize * gbuf.height as usize;
-        let rows: Vec<Vec4> = vpls
-            .slots()
-            .iter()
-            .flat_map(|v| match v {
-                Some(v) => [v.y.extend(1.0), v.n.extend(0.0), v.flux.extend(0.0)],
-                None => [Vec4::ZERO; 3],
-            })
-            .collect();
-        let b_vpls = storage_init(ctx, "vpls", &rows);
+        let b_vpls = storage_init(ctx, "vpls", &vpl_rows(vpls));
         let dummy;
         let (atlas, headers) = match maps {
             Some((a, h)) => (a, h),
@@ -257,11 +295,7 @@ impl GpuInterleavedShader {
             }
             None => &b_e,
         };
-        let groups = groups_1d(ctx, n as u64, 64);
-        let mp = uniform(ctx, "modulate params", &ModulateParams { count: n as u32, row: groups.0 * 64, pad: [0; 2] });
-        let b_out = storage(ctx, "radiance", n as u64 * 16)?;
-        let mgroup = bind(ctx, "modulate", &k.modulate_layout, &[&mp, e, &g.albedo, &b_out]);
-        dispatch(&mut enc, &k.modulate, &[&mgroup], groups);
+        let b_out = k.modulate.encode(ctx, &mut enc, e, &g.albedo, n)?;
         finish(ctx, enc)?;
         let t2 = Instant::now();
         let out: Vec<Vec4> = if self.keep { Vec::new() } else { read_back(ctx, &b_out, n)? };

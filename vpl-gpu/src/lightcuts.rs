@@ -3,9 +3,8 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::kernel::{
-    Binding, SAMPLING_WGSL, bind, dispatch, finish, groups_1d, layout, pipeline, read_back, storage, storage_init, uniform,
-};
+use crate::interleaved::{Modulate, vpl_rows};
+use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, scene_layout};
 use crate::visibility::DeviceVisibility;
 use std::time::Instant;
@@ -41,19 +40,10 @@ struct Params {
     pad: [u32; 2],
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ModulateParams {
-    count: u32,
-    row: u32,
-    pad: [u32; 2],
-}
-
 struct Kernels {
     gather_layout: wgpu::BindGroupLayout,
     gather: wgpu::ComputePipeline,
-    modulate_layout: wgpu::BindGroupLayout,
-    modulate: wgpu::ComputePipeline,
+    modulate: Modulate,
 }
 
 /// [`LightcutShader`] on the device: the light tree is built on the host
@@ -98,9 +88,7 @@ impl GpuLightcutShader {
             let gather_layout = layout(ctx, "lightcuts", &[Binding::Uniform, r, r, r, r, r, r, r, Binding::ReadWrite]);
             let source = format!("{BVH_WGSL}\n{SAMPLING_WGSL}\n{}\n{}", include_str!("lightcuts.wgsl"), include_str!("vpl_visible.wgsl"));
             let gather = pipeline(ctx, "lightcuts", &source, "gather", &[&scene_layout(ctx), &gather_layout]);
-            let modulate_layout = layout(ctx, "modulate", &[Binding::Uniform, r, r, Binding::ReadWrite]);
-            let modulate = pipeline(ctx, "modulate", include_str!("modulate.wgsl"), "main", &[&modulate_layout]);
-            Kernels { gather_layout, gather, modulate_layout, modulate }
+            Kernels { gather_layout, gather, modulate: Modulate::new(ctx) }
         })
     }
 
@@ -134,16 +122,7 @@ impl GpuLightcutShader {
         if children.is_empty() {
             children = vec![0; 2];
         }
-        let rows: Vec<Vec4> = vpls
-            .slots()
-            .iter()
-            .flat_map(|v| match v {
-                Some(v) => [v.y.extend(1.0), v.n.extend(0.0), v.flux.extend(0.0)],
-                None => [Vec4::ZERO; 3],
-            })
-            .collect();
-        let rows = if rows.is_empty() { vec![Vec4::ZERO; 3] } else { rows };
-        let b_vpls = storage_init(ctx, "vpls", &rows);
+        let b_vpls = storage_init(ctx, "vpls", &vpl_rows(vpls));
         let b_bounds = storage_init(ctx, "light tree bounds", &bounds);
         let b_children = storage_init(ctx, "light tree children", &children);
         let dummy;
@@ -181,11 +160,7 @@ impl GpuLightcutShader {
         );
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(8), gbuf.height.div_ceil(8), 1));
-        let groups = groups_1d(ctx, n as u64, 64);
-        let mp = uniform(ctx, "modulate params", &ModulateParams { count: n as u32, row: groups.0 * 64, pad: [0; 2] });
-        let b_out = storage(ctx, "radiance", n as u64 * 16)?;
-        let mgroup = bind(ctx, "modulate", &k.modulate_layout, &[&mp, &b_e, &g.albedo, &b_out]);
-        dispatch(&mut enc, &k.modulate, &[&mgroup], groups);
+        let b_out = k.modulate.encode(ctx, &mut enc, &b_e, &g.albedo, n)?;
         finish(ctx, enc)?;
         let out: Vec<Vec4> = read_back(ctx, &b_out, n)?;
         let t2 = Instant::now();

@@ -38,7 +38,8 @@ pub(super) struct Args {
     /// Run only shard I of N (units k with k mod N = I); merge later with `vpl merge`.
     #[arg(long)]
     shard: Option<vpl_bench::table1::Shard>,
-    /// Where the VPL stages run (the ground truth is always path traced on the CPU).
+    /// Where the VPL stages and the ground truth run (on the GPU the truth is
+    /// `vpl_gpu::GpuTracker`: the CPU path tracer's estimator over other streams).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     backend: BackendArg,
     /// Worker threads (default: all cores).

@@ -61,6 +61,10 @@ impl Purpose {
     pub const PLACEMENT: Purpose = Purpose(23);
     /// The lights a stochastic lightcut samples (index = pixel).
     pub const LIGHTCUT: Purpose = Purpose(24);
+    /// Tracked-pixel ground truth on a device, in chunks of samples small
+    /// enough to spread over its threads (index = tracked pixel number · 2³²
+    /// + chunk number).
+    pub const TRACKED_CHUNK: Purpose = Purpose(25);
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

@@ -14,6 +14,7 @@
 //! | [`GpuLightcutShader`]: stochastic lightcuts, the cut and walk of a host-built `vpl_lighttree` tree with the CPU's streams, shadow maps or rays | `vpl_shading::LightcutShader` | `IndirectShader` |
 //! | [`GpuCrossBilateral`] | `vpl_shading::CrossBilateral` | `apply` |
 //! | [`GpuRadiosity`]: path-traced L(y), NEE + MIS, the CPU's PCG32 streams | `vpl_pathtrace::PathRadiosity` | `RadiosityEstimator` |
+//! | [`GpuTracker`]: tracked pixels' ground truth, a chunk of samples an invocation | `vpl_pathtrace::track_chunk` (`track_with`'s estimator) | batch call |
 //! | [`Gpu::finish_frame`]: emission (the sky at misses) and direct light, the CPU's light samples and streams | `vpl_shading::direct_light` and the frame's emission | `IndirectShader::finish_on_device` |
 //! | [`Gpu::neighbours`]: k nearest points over a grid built on the device (bounds, counting sort) | `vpl_density::KnnDensity` | batch call |
 //! | [`GpuSmcSampler`]: Algorithm 1 of SMC, every line, with the paper's kNN flux | `vpl_smc::SmcSampler` (`flux = knn`) | `VplSampler`; the backend builds it for `smc-knn` |
@@ -113,6 +114,7 @@ mod raytraced;
 mod scene;
 mod shadow_maps;
 mod smc;
+mod track;
 mod visibility;
 
 pub use backend::{GpuBackend, NAME, backend, register};
@@ -130,3 +132,4 @@ pub use raytraced::GpuRayTraced;
 pub use scene::GpuScene;
 pub use shadow_maps::GpuShadowMaps;
 pub use smc::GpuSmcSampler;
+pub use track::GpuTracker;

@@ -14,19 +14,27 @@ use vpl_pathtrace::PathRadiosity;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct Params {
-    jobs: u32,
-    paths: u32,
-    max_k: u32,
-    rr_depth: u32,
-    lights: u32,
-    two_sided: u32,
-    eps: f32,
-    row: u32,
+    pub(crate) jobs: u32,
+    pub(crate) paths: u32,
+    pub(crate) max_k: u32,
+    pub(crate) rr_depth: u32,
+    pub(crate) lights: u32,
+    pub(crate) two_sided: u32,
+    pub(crate) eps: f32,
+    pub(crate) row: u32,
     /// Index of the environment light, `u32::MAX` without one.
-    env: u32,
+    pub(crate) env: u32,
     /// `row` of the `sum` dispatch.
-    sum_row: u32,
-    pad: [u32; 2],
+    pub(crate) sum_row: u32,
+    /// Fewest scattering vertices a counted path has (1 for radiosity).
+    pub(crate) min_k: u32,
+    /// The clamp's G_max of the segment leaving the first vertex, negative
+    /// for none.
+    pub(crate) g_max: f32,
+    /// `track`: the first chunk of a dispatch, and chunks per pixel.
+    pub(crate) first: u32,
+    pub(crate) chunks: u32,
+    pub(crate) pad: [u32; 2],
 }
 
 /// The WGSL of the radiosity kernels and of what reads lights as they do
@@ -69,13 +77,19 @@ pub(crate) struct Kernels {
 
 impl Kernels {
     pub(crate) fn new(ctx: &crate::GpuContext) -> Kernels {
-        let (r, w) = (Binding::Read, Binding::ReadWrite);
-        let layout = layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w]);
+        let layout = radiosity_layout(ctx);
         let source = radiosity_source();
         let paths = pipeline(ctx, "radiosity", &source, "main", &[&scene_layout(ctx), &layout]);
         let sum = pipeline(ctx, "radiosity sum", &source, "sum", &[&scene_layout(ctx), &layout]);
         Kernels { layout, paths, sum }
     }
+}
+
+/// The radiosity layout: the parameters, the jobs, their stream keys, the
+/// lights (three buffers), the light of each triangle, and two outputs.
+pub(crate) fn radiosity_layout(ctx: &crate::GpuContext) -> wgpu::BindGroupLayout {
+    let (r, w) = (Binding::Read, Binding::ReadWrite);
+    layout(ctx, "radiosity", &[Binding::Uniform, r, r, r, r, r, r, w, w])
 }
 
 /// The parameters of a batch of `jobs` points, `config`'s paths each, and
@@ -157,6 +171,10 @@ pub(crate) fn light_params(scene: &Scene) -> Params {
         row: 0,
         env: scene.environment.map_or(u32::MAX, |i| i as u32),
         sum_row: 0,
+        min_k: 1,
+        g_max: -1.0,
+        first: 0,
+        chunks: 0,
         pad: [0; 2],
     }
 }

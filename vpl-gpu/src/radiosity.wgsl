@@ -7,6 +7,18 @@
 // Entry `sum` then adds each point's paths in path order, as the CPU twin
 // adds them, so only one sum a point crosses back to the host.
 //
+// Entry `track`: tracked pixels' ground truth, twin of
+// vpl_pathtrace::track_chunk (PathTracer::li through a pixel): one
+// invocation a chunk of a pixel's samples, writing the chunk's sum, sample
+// count and sum of squares to out_l. A pixel's chunks are padded to whole
+// blocks of BLOCK (the padding takes no samples); `track_sum` then adds
+// each block's chunks in order into out_sum, which is what crosses back.
+// jobs holds the camera (five rows, as camera_ray_of reads them, the
+// footprint in raster.w: 0 the centre, 1 the box) and then one row a
+// pixel (x, y); rng_key the one key of the chunks' streams. Invocation j
+// of a dispatch is chunk `first + j` of the padded sequence, `chunks` a
+// pixel.
+//
 // jobs: three vec4 per point: [p, material], [n, two flags], [ng, -].
 // rng_key: per point the stream key (lo, hi) of its radiosity streams.
 // lights: four vec4 per light: [type (0 area, 1 point, 2 spot, 3 sun,
@@ -29,8 +41,16 @@ struct Params {
     env: u32,
     // `row` of the `sum` dispatch.
     sum_row: u32,
+    // Fewest scattering vertices a counted path has (1 for radiosity).
+    min_k: u32,
+    // The clamp's G_max of the segment leaving the first vertex, negative
+    // for none.
+    g_max: f32,
+    // `track`: the first chunk of this dispatch, and chunks per pixel.
+    first: u32,
+    chunks: u32,
+    pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
@@ -45,6 +65,10 @@ struct Params {
 
 const FRAC_1_PI: f32 = 0.31830987;
 const TWO_PI: f32 = 6.2831855;
+// Samples a chunk of `track` (vpl_pathtrace::TRACK_CHUNK).
+const CHUNK: u32 = 8u;
+// Chunks `track_sum` adds into one block.
+const BLOCK: u32 = 64u;
 
 fn power_heuristic(pa: f32, pb: f32) -> f32 {
     let a = pa * pa;
@@ -239,19 +263,17 @@ fn light_pdf(x: vec3<f32>, y: vec3<f32>, tri: u32) -> f32 {
     return light_pmf[li] * dist2 / (cos_l * tri_info[4u * tri + 2u].w);
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k_job = id.x + id.y * params.row;
-    if (k_job >= params.jobs * params.paths) { return; }
-    let job = k_job / params.paths;
-    seed_stream(k_job - job * params.paths, rng_key[job]);
-    let a = jobs[3u * job];
-    var p = a.xyz;
-    var material = bitcast<u32>(a.w);
-    var n = jobs[3u * job + 1u].xyz;
-    var ng = jobs[3u * job + 2u].xyz;
-    var wo = n;
-    var k = 0u;
+// PathTracer::walk on diffuse materials: the radiance a path brings that
+// has reached surface point p (shading normal n, geometric ng, `material`)
+// from direction wo (pointing away from p) after k scattering vertices,
+// counting paths whose number of vertices lies in min_k..=max_k.
+fn walk(p0: vec3<f32>, n0: vec3<f32>, ng0: vec3<f32>, material0: u32, wo0: vec3<f32>, k0: u32) -> vec3<f32> {
+    var p = p0;
+    var n = n0;
+    var ng = ng0;
+    var material = material0;
+    var wo = wo0;
+    var k = k0;
     var l = vec3<f32>(0.0);
     var beta = vec3<f32>(1.0);
     loop {
@@ -270,18 +292,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let u_b0 = next_f32();
         let u_b1 = next_f32();
         let last = k + 1u == params.max_k;
-        // Next-event estimation (every path here has k + 1 >= min_k = 1).
-        let ls = sample_light(p, u_sel, u_l0, u_l1);
-        if (ls.ok) {
-            let cos_i = dot(n, ls.wi);
-            if (cos_i > 0.0 && dot(ls.wi, ng) > 0.0 && light_unoccluded(p, ng, ls)) {
-                if (ls.delta) {
-                    l = l + beta * f * ls.li * (cos_i / ls.p_sel);
-                } else {
-                    let pdf_light = ls.p_sel * ls.pdf;
-                    var w = 1.0;
-                    if (!last) { w = power_heuristic(pdf_light, cos_i * FRAC_1_PI); }
-                    l = l + beta * f * ls.li * (cos_i * w / pdf_light);
+        // Next-event estimation: a path with k + 1 scattering vertices.
+        if (k + 1u >= params.min_k) {
+            let ls = sample_light(p, u_sel, u_l0, u_l1);
+            if (ls.ok) {
+                let cos_i = dot(n, ls.wi);
+                if (cos_i > 0.0 && dot(ls.wi, ng) > 0.0 && light_unoccluded(p, ng, ls)) {
+                    if (ls.delta) {
+                        l = l + beta * f * ls.li * (cos_i / ls.p_sel);
+                    } else {
+                        let pdf_light = ls.p_sel * ls.pdf;
+                        var w = 1.0;
+                        if (!last) { w = power_heuristic(pdf_light, cos_i * FRAC_1_PI); }
+                        l = l + beta * f * ls.li * (cos_i * w / pdf_light);
+                    }
                 }
             }
         }
@@ -294,8 +318,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let origin = p + ng * params.eps;
         let h = closest_hit(origin, wi, NO_HIT);
         if (h.prim == NONE) {
-            // Leaving the scene: the environment, weighted against NEE.
-            if (params.env != NONE) {
+            // Leaving the scene: the environment ends a path with k + 1
+            // vertices, weighted against NEE.
+            if (params.env != NONE && k + 1u >= params.min_k) {
                 let le = sky_radiance(params.env, wi);
                 if (max(max(le.x, le.y), le.z) > 0.0) {
                     l = l + beta * le * power_heuristic(pdf_bsdf, light_pmf[params.env] * sky_pdf(params.env, wi));
@@ -311,13 +336,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let tng = sf.ng;
         let qn = sf.n;
         let q_material = sf.material;
-        // Emission at the next vertex, weighted against NEE.
-        if (dot(-wi, tng) > 0.0) {
+        // Emission at the next vertex: a path with k vertices, weighted against NEE.
+        if (k >= params.min_k && dot(-wi, tng) > 0.0) {
             let le = materials[2u * q_material + 1u].xyz;
             if (max(max(le.x, le.y), le.z) > 0.0) {
                 let w = power_heuristic(pdf_bsdf, light_pdf(p, q, tri));
                 l = l + beta * le * w;
             }
+        }
+        // The clamp of the segment that leaves the first vertex, min(G,
+        // G_max) / G with G = cos·cos / t² (vpl_core::clamp::geometry_term).
+        if (k == 1u && params.g_max >= 0.0) {
+            let g = max(local.z, 0.0) * max(abs(dot(qn, -wi)), 0.0) / (h.t * h.t);
+            if (g > params.g_max) { beta = beta * (params.g_max / g); }
         }
         if (k >= params.rr_depth) {
             let qq = min(max(max(beta.x, beta.y), beta.z), 0.95);
@@ -330,7 +361,88 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         material = q_material;
         wo = -wi;
     }
-    out_l[k_job] = vec4<f32>(l, 0.0);
+    return l;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k_job = id.x + id.y * params.row;
+    if (k_job >= params.jobs * params.paths) { return; }
+    let job = k_job / params.paths;
+    seed_stream(k_job - job * params.paths, rng_key[job]);
+    let a = jobs[3u * job];
+    let n = jobs[3u * job + 1u].xyz;
+    out_l[k_job] = vec4<f32>(walk(a.xyz, n, jobs[3u * job + 2u].xyz, bitcast<u32>(a.w), n, 0u), 0.0);
+}
+
+// PathTracer::li of the camera ray through raster (px, py) with lens
+// sample (lu, lv).
+fn li(px: f32, py: f32, lu: f32, lv: f32) -> vec3<f32> {
+    let ray = camera_ray_at(jobs[0], jobs[1], jobs[2], jobs[3], jobs[4], px, py, lu, lv);
+    let h = closest_hit(ray.o, ray.d, NO_HIT);
+    if (h.prim == NONE) {
+        // The environment seen directly: a path without scattering vertices.
+        if (params.min_k == 0u && params.env != NONE) { return sky_radiance(params.env, ray.d); }
+        return vec3<f32>(0.0);
+    }
+    let q = ray.o + ray.d * h.t;
+    let sf = surface_at(h.prim, q);
+    var l = vec3<f32>(0.0);
+    if (params.min_k == 0u && dot(-ray.d, sf.ng) > 0.0) {
+        l = materials[2u * sf.material + 1u].xyz;
+    }
+    return l + walk(q, sf.n, sf.ng, sf.material, -ray.d, 0u);
+}
+
+// One chunk of a tracked pixel's samples (vpl_pathtrace::track_chunk):
+// its sum and sum of squares.
+@compute @workgroup_size(64)
+fn track(@builtin(global_invocation_id) id: vec3<u32>) {
+    let j = id.x + id.y * params.row;
+    if (j >= params.jobs) { return; }
+    let g = params.first + j;
+    let pixel = g / params.chunks;
+    let chunk = g - pixel * params.chunks;
+    let n = min(params.paths - min(chunk * CHUNK, params.paths), CHUNK);
+    seed_stream64(vec2<u32>(chunk, pixel), rng_key[0]);
+    let xy = jobs[5u + pixel].xy;
+    let boxed = jobs[4].w > 0.5;
+    var sum = vec3<f32>(0.0);
+    var sum_sq = vec3<f32>(0.0);
+    // Samples taken: fewer than n where a device cuts loops short.
+    var done = 0u;
+    for (var i = 0u; i < n; i = i + 1u) {
+        var u = 0.5;
+        var v = 0.5;
+        if (boxed) {
+            u = next_f32();
+            v = next_f32();
+        }
+        let lu = next_f32();
+        let lv = next_f32();
+        let l = li(xy.x + u, xy.y + v, lu, lv);
+        sum = sum + l;
+        sum_sq = sum_sq + l * l;
+        done = done + 1u;
+    }
+    out_l[2u * j] = vec4<f32>(sum, f32(done));
+    out_l[2u * j + 1u] = vec4<f32>(sum_sq, 0.0);
+}
+
+// Block b of a `track` dispatch: its BLOCK chunks' sums, counts and sums of
+// squares added in chunk order.
+@compute @workgroup_size(64)
+fn track_sum(@builtin(global_invocation_id) id: vec3<u32>) {
+    let b = id.x + id.y * params.sum_row;
+    if (b * BLOCK >= params.jobs) { return; }
+    var s = vec4<f32>(0.0);
+    var s2 = vec4<f32>(0.0);
+    for (var i = 0u; i < BLOCK; i = i + 1u) {
+        s = s + out_l[2u * (b * BLOCK + i)];
+        s2 = s2 + out_l[2u * (b * BLOCK + i) + 1u];
+    }
+    out_sum[2u * b] = s;
+    out_sum[2u * b + 1u] = s2;
 }
 
 // The sum of each point's paths, added in path order.

@@ -51,11 +51,16 @@ fn mix64(v: vec2<u32>) -> vec2<u32> {
 // vpl_core::rng::keyed_state: the PCG32 (state, increment) of stream
 // `index` under `key`.
 fn keyed_state(key: vec2<u32>, index: u32) -> vec4<u32> {
+    return keyed_state64(key, vec2<u32>(index, 0u));
+}
+
+// keyed_state of a 64-bit index (lo, hi).
+fn keyed_state64(key: vec2<u32>, index: vec2<u32>) -> vec4<u32> {
     let zero = vec2<u32>(0u);
-    let state = mix64(key ^ vec2<u32>(index, 0u));
+    let state = mix64(key ^ index);
     // key.rotate_left(17)
     let rot = vec2<u32>((key.x << 17u) | (key.y >> 15u), (key.y << 17u) | (key.x >> 15u));
-    let sequence = mix64(rot ^ mul_add64(vec2<u32>(index, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u), zero));
+    let sequence = mix64(rot ^ mul_add64(index, vec2<u32>(0x7F4A7C15u, 0x9E3779B9u), zero));
     let inc = vec2<u32>((sequence.x << 1u) | 1u, (sequence.y << 1u) | (sequence.x >> 31u));
     let s = mul_add64(add64(state, inc), vec2<u32>(0x4C957F2Du, 0x5851F42Du), inc);
     return vec4<u32>(s, inc);
@@ -66,7 +71,12 @@ var<private> rng_inc: vec2<u32>;
 
 // Starts this invocation's draws at stream `index` under `key`.
 fn seed_stream(index: u32, key: vec2<u32>) {
-    let r = keyed_state(key, index);
+    seed_stream64(vec2<u32>(index, 0u), key);
+}
+
+// seed_stream of a 64-bit index (lo, hi).
+fn seed_stream64(index: vec2<u32>, key: vec2<u32>) {
+    let r = keyed_state64(key, index);
     rng_state = r.xy;
     rng_inc = r.zw;
 }
@@ -149,8 +159,16 @@ fn camera_ray_of(origin: vec4<f32>, forward: vec4<f32>, right: vec4<f32>, up: ve
     let v = next_f32();
     let lu = next_f32();
     let lv = next_f32();
-    let ndc_x = 2.0 * (u * w) / w - 1.0;
-    let ndc_y = 1.0 - 2.0 * (v * h) / h;
+    return camera_ray_at(origin, forward, right, up, raster, u * w, v * h, lu, lv);
+}
+
+// The camera's ray through raster point (px, py) with lens sample (lu, lv)
+// (vpl_core::Camera::ray), the camera in the rows of camera_ray_of.
+fn camera_ray_at(origin: vec4<f32>, forward: vec4<f32>, right: vec4<f32>, up: vec4<f32>, raster: vec4<f32>, px: f32, py: f32, lu: f32, lv: f32) -> CameraRay {
+    let w = raster.x;
+    let h = raster.y;
+    let ndc_x = 2.0 * px / w - 1.0;
+    let ndc_y = 1.0 - 2.0 * py / h;
     let d = forward.xyz + right.xyz * (ndc_x * forward.w) + up.xyz * (ndc_y * right.w);
     var o = origin.xyz;
     var dir = normalize(d);

@@ -45,7 +45,7 @@ pub mod render;
 pub use integrator::PathTracer;
 pub use radiosity::PathRadiosity;
 pub use render::{
-    Accumulator, Footprint, RenderError, RenderOutput, RenderSettings, TRACK_BATCH, Tile, TrackRequest, TrackedPixel, pixel, render,
-    render_cancellable, render_streamed, track, track_cancellable, track_with,
+    Accumulator, Footprint, RenderError, RenderOutput, RenderSettings, TRACK_BATCH, TRACK_CHUNK, Tile, TrackRequest, TrackedPixel, pixel,
+    render, render_cancellable, render_streamed, track, track_cancellable, track_chunk, track_with,
 };
 pub use vpl_core::Mode;

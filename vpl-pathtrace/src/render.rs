@@ -194,6 +194,22 @@ impl Accumulator {
         }
     }
 
+    /// An accumulator of `n` samples whose channels sum to `sum` and whose
+    /// squares sum to `sum_sq` (partial sums made elsewhere, a device's).
+    pub fn from_sums(n: u64, sum: [f64; 3], sum_sq: [f64; 3]) -> Self {
+        Self { n, sum, sum_sq }
+    }
+
+    /// The channels' sums and the sums of their squares.
+    pub fn sums(&self) -> ([f64; 3], [f64; 3]) {
+        (self.sum, self.sum_sq)
+    }
+
+    /// The estimate at `pixel`: mean, standard error and count.
+    pub fn tracked(&self, pixel: (u32, u32)) -> TrackedPixel {
+        TrackedPixel { pixel, mean: self.mean(), stderr: self.stderr(), samples: self.count() }
+    }
+
     /// Merges another accumulator.
     pub fn merge(&mut self, o: &Accumulator) {
         self.n += o.n;
@@ -349,9 +365,39 @@ fn tracked(
             for a in &accs[p * batches as usize..(p + 1) * batches as usize] {
                 acc.merge(a);
             }
-            TrackedPixel { pixel, mean: acc.mean(), stderr: acc.stderr(), samples: acc.count() }
+            acc.tracked(pixel)
         })
         .collect()
+}
+
+/// Samples per chunk of [`track_chunk`]: few enough that a device spreads a
+/// pixel's samples over thousands of threads, and that one thread's loops
+/// stay within what software devices allow (llvmpipe stops a thread after
+/// 65,535 loop iterations in all, BVH traversals included).
+pub const TRACK_CHUNK: u32 = 8;
+
+/// Chunk `chunk` of the samples [`TrackRequest`] asks at its pixel number
+/// `p`: samples `chunk · TRACK_CHUNK ..` (at most [`TRACK_CHUNK`], fewer in
+/// the last chunk) drawn from stream `(p · 2³² + chunk)` under
+/// [`Purpose::TRACKED_CHUNK`], each as [`track_with`] draws one (the point
+/// in the pixel for [`Footprint::Box`], the lens sample, the path). The
+/// reference of a device's tracked pixels (`vpl_gpu::GpuTracker`), which
+/// computes each chunk in one thread: the same estimator as [`track_with`]
+/// over other streams.
+pub fn track_chunk(scene: &Scene, camera: &Camera, pt: &PathTracer, request: &TrackRequest, p: usize, chunk: u32) -> Accumulator {
+    let mut acc = Accumulator::default();
+    let Some(&(x, y)) = request.pixels.get(p) else { return acc };
+    let n = TRACK_CHUNK.min(request.spp.saturating_sub(chunk.saturating_mul(TRACK_CHUNK)));
+    let mut rng = stream(request.seed, request.frame, Purpose::TRACKED_CHUNK, ((p as u64) << 32) | chunk as u64);
+    for _ in 0..n {
+        let (u, v) = match request.footprint {
+            Footprint::Box => rng.next_2d(),
+            Footprint::Centre => (0.5, 0.5),
+        };
+        let lens = rng.next_2d();
+        acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
+    }
+    acc
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@
 //!   interleaved, exhaustively and by stochastic lightcuts, error over wall time),
 //!   and `results/README.md` linking all of it. `--shard I/N` runs shard I of Table 1's units
 //!   (shard 0 also runs the other jobs); `cargo xtask merge` then writes the tables.
-//!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 on the GPU (`vpl-gpu`); path
-//!   tracing, the figures and Georgiev's experiment stay on the CPU.
+//!   `--backend gpu` runs the VPL stages of Table 1 and Table 2 and Table 1's ground truth on the
+//!   GPU (`vpl-gpu`); the figures and Georgiev's experiment stay on the CPU.
 //!   `--docs` then writes `docs/reproduction.md` and its plots from `results/` (module `docs`).
 //!   `--slurm [--shards N] [--partition P] [--time T] [--cpus-per-task C] [--gpus G] [--dry-run]`
 //!   submits Table 1 as a Slurm job array and a merge job after it instead (module `slurm`);

@@ -3,7 +3,8 @@
 //! this machine, from the costs the run measured: each method unit's wall time plus the frames the
 //! full sequence adds at that unit's median per-frame time (the first
 //! frame, which builds everything, is in the unit's time once), and the
-//! ground truth's time per frame scaled by the full profile's samples.
+//! ground truth's time per frame: its sampling scaled by the full
+//! profile's samples, its set-up (the scene, a device's upload) not.
 
 use super::{MethodUnit, Table1Spec};
 use serde::{Deserialize, Serialize};
@@ -30,9 +31,9 @@ impl FullEstimate {
     }
 }
 
-/// Per row of `spec`: the seconds its truth units took (`None` if any
-/// recorded none).
-pub(super) type TruthSeconds = Vec<Option<f64>>;
+/// Per row of `spec`: the seconds its truth units took, as (set-up,
+/// sampling) (`None` if any recorded none).
+pub(super) type TruthSeconds = Vec<Option<(f64, f64)>>;
 
 /// The estimate of `full` from a run of `spec` with method units `runs` and
 /// truth times `truth` (per row of `spec`); `None` where no row of the run
@@ -53,7 +54,9 @@ pub fn estimate(spec: &Table1Spec, runs: &[MethodUnit], truth: &TruthSeconds, fu
         // The full profile's seeds: a method's units scale with their number.
         method_seconds += per_unit * full.seeds as f64 / spec.seeds.max(1) as f64;
         truth_seconds = match (truth_seconds, t) {
-            (Some(sum), Some(s)) => Some(sum + s / quick * whole * full.truth_spp as f64 / spec.truth_spp.max(1) as f64),
+            (Some(sum), Some((setup, sampling))) => {
+                Some(sum + (setup + sampling * full.truth_spp as f64 / spec.truth_spp.max(1) as f64) / quick * whole)
+            }
             _ => None,
         };
     }
@@ -94,8 +97,9 @@ mod tests {
     }
 
     /// Two units of 8 frames (10 s each; 100 ms a frame after the first) on
-    /// a 108-frame sequence: each adds 100 frames × 0.1 s; truth 4 s for 8
-    /// frames at 1,000 samples scales to 108 frames at 10,000.
+    /// a 108-frame sequence: each adds 100 frames × 0.1 s; truth 4 s of
+    /// sampling for 8 frames at 1,000 samples scales to 108 frames at
+    /// 10,000, and its 0.8 s of set-up to 108 frames alone.
     #[test]
     fn the_estimate_adds_the_missing_frames_at_the_measured_cost() {
         let mut spec = Table1Spec::quick();
@@ -108,12 +112,12 @@ mod tests {
         full.truth_spp = 10_000;
         let ms = [5000.0, 100.0, 90.0, 110.0, 100.0, 100.0, 100.0, 100.0];
         let runs = vec![unit("office", 10.0, &ms), unit("office", 10.0, &ms)];
-        let e = estimate(&spec, &runs, &vec![Some(4.0)], &full).unwrap();
+        let e = estimate(&spec, &runs, &vec![Some((0.8, 4.0))], &full).unwrap();
         assert!((e.method_seconds - 2.0 * (10.0 + 100.0 * 0.1)).abs() < 1e-9, "{e:?}");
-        assert!((e.truth_seconds.unwrap() - 4.0 / 8.0 * 108.0 * 10.0).abs() < 1e-9, "{e:?}");
+        assert!((e.truth_seconds.unwrap() - (0.8 + 4.0 * 10.0) / 8.0 * 108.0).abs() < 1e-9, "{e:?}");
         assert_eq!(e.rows, vec!["office".to_string()]);
         assert_eq!(estimate(&spec, &runs, &vec![None], &full).unwrap().truth_seconds, None);
         full.rows.remove(0);
-        assert_eq!(estimate(&spec, &runs, &vec![Some(4.0)], &full), None);
+        assert_eq!(estimate(&spec, &runs, &vec![Some((0.8, 4.0))], &full), None);
     }
 }

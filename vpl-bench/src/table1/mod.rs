@@ -16,6 +16,7 @@ pub mod estimate;
 pub mod report;
 pub mod rows;
 pub mod stats;
+pub mod truth;
 
 use crate::metrics::{TemporalError, tone_mapped_luminance, tone_mapped_stderr};
 use crate::pipeline::{BackendKind, PipelineSpec, ShadingSpec, VisibilitySpec};
@@ -27,7 +28,6 @@ use std::time::Instant;
 use vpl_core::glam::Vec3;
 use vpl_core::image::write_atomic;
 use vpl_core::{Budget, CoreError, Mode, Params};
-use vpl_pathtrace::{Footprint, PathTracer, TrackRequest, track_with};
 use vpl_sampling::Registry;
 
 /// Errors of a Table 1 run.
@@ -103,7 +103,7 @@ pub struct Table1Spec {
     /// Independent runs of every method (the confidence intervals' seeds).
     #[serde(default = "one")]
     pub seeds: u32,
-    /// Where the VPL stages run (ground truth is always the CPU path tracer).
+    /// Where the VPL stages and the ground truth run ([`truth::Truth`]).
     #[serde(default)]
     pub backend: BackendKind,
 }
@@ -411,6 +411,11 @@ pub struct TruthUnit {
     /// Wall time of the unit in seconds (0 in units of older versions).
     #[serde(default)]
     pub seconds: f64,
+    /// The part of [`TruthUnit::seconds`] that does not grow with the
+    /// samples: loading the scene, the upload to a device (0 in units of
+    /// older versions).
+    #[serde(default)]
+    pub setup_seconds: f64,
 }
 
 /// One method's run of a sequence.
@@ -560,6 +565,7 @@ pub fn run(
     let total: u64 = mine.iter().map(|(_, u)| spec.unit_weight(*u)).sum();
     let mut summary = RunSummary { total_units: units.len(), ..RunSummary::default() };
     let mut done = 0u64;
+    let mut truth = truth::Truth::new();
     for (_, unit) in mine {
         let path = dir.join(spec.unit_file(unit));
         let w = spec.unit_weight(unit);
@@ -582,7 +588,7 @@ pub fn run(
             Unit::Truth { row, frame } => {
                 let r = rows::row(&spec.rows[row].id).expect("validated");
                 progress(&Progress { done, total, message: format!("{} ground truth", r.id) });
-                write_json(&path, &run_truth(spec, &r, frame)?)?;
+                write_json(&path, &truth.unit(spec, &r, frame)?)?;
             }
         }
         summary.ran += 1;
@@ -664,39 +670,6 @@ fn run_method(
     Ok(u)
 }
 
-fn run_truth(spec: &Table1Spec, row: &Row, frame: u32) -> Result<TruthUnit, Table1Error> {
-    let start = Instant::now();
-    let setup = row.setup()?;
-    let (scene, camera) = setup.frame(frame)?;
-    // The truth draws the materials as the VPL methods it judges do.
-    let scene = scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
-    let camera = camera.with_resolution(spec.size)?;
-    let pt = PathTracer::new(spec.max_depth, Mode::Indirect);
-    // Rays through the pixel centres: the one point a G-buffer shades per
-    // pixel, so edges inside a pixel do not count as VPL error.
-    let t = track_with(
-        &scene,
-        &camera,
-        &pt,
-        &TrackRequest {
-            pixels: &row.pixels(spec.size),
-            spp: spec.truth_spp,
-            seed: spec.seed ^ 0x0074_7275_7468,
-            frame: frame as u64,
-            footprint: Footprint::Centre,
-        },
-    );
-    Ok(TruthUnit {
-        settings: Some(UnitSettings::of(spec)),
-        row: row.id.into(),
-        frame,
-        mean: t.iter().map(|p| p.mean.to_array()).collect(),
-        stderr: t.iter().map(|p| p.stderr.to_array()).collect(),
-        samples: spec.truth_spp as u64,
-        seconds: start.elapsed().as_secs_f64(),
-    })
-}
-
 /// One method's errors on one row.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodResult {
@@ -774,7 +747,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
     let mut runs = Vec::new();
     let mut truth_seconds: estimate::TruthSeconds = Vec::new();
     for (ri, run) in spec.rows.iter().enumerate() {
-        let mut row_truth = Some(0.0);
+        let mut row_truth = Some((0.0, 0.0));
         let row = rows::row(&run.id).expect("validated");
         let mut truth = Vec::new();
         let mut se_sum = 0.0;
@@ -791,7 +764,8 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
                     format!("it holds {} pixels, the sequence tracks {}", t.mean.len(), row.tracked.len()),
                 ));
             }
-            row_truth = row_truth.filter(|_| t.seconds > 0.0).map(|s| s + t.seconds);
+            let setup = t.setup_seconds.clamp(0.0, t.seconds);
+            row_truth = row_truth.filter(|_| t.seconds > 0.0).map(|(a, b)| (a + setup, b + t.seconds - setup));
             truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
             for (m, s) in t.mean.iter().zip(&t.stderr) {
                 se_sum += tone_mapped_stderr(Vec3::from(*m), Vec3::from(*s));

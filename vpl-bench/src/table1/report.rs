@@ -91,7 +91,7 @@ pub fn markdown(r: &Table1Results) -> String {
         "Hedman et al. 2017, §5.2, redone on the built-in scenes and on real geometry (`sponza`: Dabrovic Sponza with a \
          point light moving along the nave; `munich`: Munich city blocks under a moving sun; scene files in `scenes/`). Eight tracked pixels per sequence; indirect light only, \
          luminance after Reinhard's operator L/(1+L); ground truth from the path tracer ({} samples per pixel and frame, \
-         rays through the pixel centre); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
+         rays through the pixel centre, on the run's backend); every method with the same VPL budget, {}² paraboloid shadow maps, 4×4 interleaved \
          shading, the cross-bilateral filter and the clamp G_max = I / A_view of each frame's view; no temporal reprojection; max depth {} (three \
          indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
          Profile `{}`, {}×{} pixels, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL); SMC is the toolkit's default \

@@ -472,6 +472,9 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         if shard.is_some() {
             return Err("--slurm makes the shards itself: leave out --shard".into());
         }
+        if settings.gpus > 0 && backend != "gpu" {
+            return Err("--gpus gives each task a GPU that only --backend gpu uses (the VPL stages and the ground truth): add it".into());
+        }
         let vpl = build_vpl()?;
         let mut t1 = vec!["--profile".to_string(), profile.name.to_string(), "--backend".into(), backend.clone()];
         t1.extend(table1_args.iter().cloned());

@@ -22,6 +22,9 @@ pub enum GpuError {
     /// iterations in all).
     #[error("the device cut {0} short: its answers are incomplete (llvmpipe stops a kernel's loops after 65,535 iterations)")]
     CutShort(&'static str),
+    /// The caller cancelled the work before it ended.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// An adapter, its device and queue, and the count of what crossed

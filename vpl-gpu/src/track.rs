@@ -9,6 +9,7 @@ use crate::kernel::{bind, dispatch, finish_read, groups_1d, pipeline, storage, s
 use crate::radiosity::{light_params, radiosity_layout, radiosity_source};
 use crate::scene::scene_layout;
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
 use vpl_core::glam::Vec4;
 use vpl_core::rng::stream_key;
 use vpl_core::{Camera, Purpose, Scene};
@@ -91,6 +92,23 @@ impl GpuTracker {
     /// `with_material_policy(MaterialPolicy::Diffuse)`, as the VPL methods
     /// draw it) and when the device fails or cuts its loops short.
     pub fn track(&self, scene: &Scene, camera: &Camera, pt: &PathTracer, request: &TrackRequest) -> Result<Vec<TrackedPixel>, GpuError> {
+        self.track_cancellable(scene, camera, pt, request, &|_, _| {}, &AtomicBool::new(false))
+    }
+
+    /// [`GpuTracker::track`] that reports `progress(chunks done, chunks)`
+    /// after each submission (up to 65,536 chunks of [`TRACK_CHUNK`]
+    /// samples, padding included) and stops before the next once `cancel`
+    /// is set (from another thread), answering [`GpuError::Cancelled`]. An
+    /// uncancelled run is [`GpuTracker::track`]'s result bit for bit.
+    pub fn track_cancellable(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pt: &PathTracer,
+        request: &TrackRequest,
+        progress: &(dyn Fn(u64, u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<Vec<TrackedPixel>, GpuError> {
         if let Some(m) = scene.materials.iter().find(|m| m.layered.is_some()) {
             return Err(GpuError::Invalid(format!(
                 "material '{}' is layered: the device path tracer draws diffuse materials only (draw the scene with MaterialPolicy::Diffuse)",
@@ -137,6 +155,9 @@ impl GpuTracker {
         let mut blocks: Vec<[Vec4; 2]> = Vec::with_capacity((total / BLOCK) as usize);
         let mut first = 0u64;
         while first < total {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(GpuError::Cancelled);
+            }
             let n = (total - first).min(CHUNKS_PER_SUBMISSION);
             let groups = groups_1d(ctx, n, 64);
             let sum_groups = groups_1d(ctx, n / BLOCK, 64);
@@ -167,6 +188,7 @@ impl GpuTracker {
             dispatch(&mut enc, &kernels.track_sum, &[&gs.group, &group], sum_groups);
             blocks.extend(finish_read::<[Vec4; 2]>(ctx, enc, &b_blocks, (n / BLOCK) as usize)?);
             first += n;
+            progress(first, total);
         }
         let per_pixel = (chunks / BLOCK) as usize;
         let block_samples = BLOCK * TRACK_CHUNK as u64;

@@ -15,6 +15,7 @@
 mod common;
 
 use common::context;
+use std::sync::atomic::AtomicBool;
 use vpl_core::environment::Sky;
 use vpl_core::glam::Vec3;
 use vpl_core::{Camera, GeometryClamp, Light, MaterialPolicy, Mode, Purpose, Scene, SceneSetup, stream};
@@ -99,7 +100,15 @@ fn gpu_tracked_pixels_add_their_chunks() {
     for spp in [2 * 64 * TRACK_CHUNK + 13, 200_000 - 3] {
         let request = TrackRequest { pixels: &pixels, spp, seed: 2, frame: 0, footprint: Footprint::Box };
         let want = cpu(&s.scene, &camera, &pt, &request);
-        let got = tracker.track(&s.scene, &camera, &pt, &request).unwrap();
+        // Progress after each submission, up to every (padded) chunk.
+        let calls = std::sync::Mutex::new(Vec::new());
+        let got = tracker
+            .track_cancellable(&s.scene, &camera, &pt, &request, &|d, t| calls.lock().unwrap().push((d, t)), &AtomicBool::new(false))
+            .unwrap();
+        let chunks = 3 * (spp.div_ceil(TRACK_CHUNK) as u64).next_multiple_of(64);
+        let calls = calls.into_inner().unwrap();
+        assert_eq!(calls.last(), Some(&(chunks, chunks)), "{calls:?}");
+        assert_eq!(calls.len() as u64, chunks.div_ceil(65_536), "{calls:?}");
         for ((m, se), g) in want.iter().zip(&got) {
             eprintln!("{spp} spp at {:?}: {m} ± {se} (CPU) vs {} ± {} (GPU)", g.pixel, g.mean, g.stderr);
             assert_eq!(g.samples, spp as u64);
@@ -111,6 +120,9 @@ fn gpu_tracked_pixels_add_their_chunks() {
     let request = TrackRequest { pixels: &pixels, spp: 100, seed: 2, frame: 0, footprint: Footprint::Box };
     let none = tracker.track(&s.scene, &camera, &PathTracer::new(1, Mode::Indirect), &request).unwrap();
     assert!(none.iter().all(|g| g.mean == Vec3::ZERO && g.samples == 100));
+    // Cancelled before it starts: no samples, and it says so.
+    let r = tracker.track_cancellable(&s.scene, &camera, &pt, &request, &|_, _| {}, &AtomicBool::new(true));
+    assert!(matches!(r, Err(GpuError::Cancelled)));
 }
 
 /// Layered materials and pixels outside the image are refused, not drawn

@@ -80,6 +80,36 @@ pub fn render_path<'py>(
     Ok((image(py, &out.image), image(py, &out.stderr)))
 }
 
+/// What `track` on the device takes: the scene (materials as asked), the
+/// camera, the path tracer and the request.
+type TrackJob<'a> = (&'a vpl_render::vpl_core::Scene, &'a vpl_render::vpl_core::Camera, &'a PathTracer, &'a TrackRequest<'a>);
+
+/// `track(backend="gpu")`: the same estimator on the device
+/// (`vpl_gpu::GpuTracker`, opened once a process), interruptible between
+/// its submissions.
+#[cfg(feature = "gpu")]
+fn track_on_device<'py>(py: Python<'py>, (scene, camera, pt, request): TrackJob<'_>, progress: bool) -> PyResult<MeansAndErrors<'py>> {
+    static TRACKER: std::sync::OnceLock<Result<vpl_gpu::GpuTracker, String>> = std::sync::OnceLock::new();
+    let tracker =
+        TRACKER.get_or_init(|| vpl_gpu::Gpu::new().map(vpl_gpu::GpuTracker::new).map_err(|e| e.to_string())).as_ref().map_err(vpl_err)?;
+    let done = AtomicU64::new(0);
+    let chunks = request.pixels.len() as u64 * (request.spp.div_ceil(vpl_pathtrace::TRACK_CHUNK) as u64).next_multiple_of(64);
+    let mut bar = Progress::new(py, progress, chunks, "tracking on the GPU")?;
+    let out = interruptible(
+        py,
+        |cancel| tracker.track_cancellable(scene, camera, pt, request, &|d, _| _ = done.fetch_max(d, Ordering::Relaxed), cancel),
+        |py| bar.update(py, done.load(Ordering::Relaxed)),
+    )?;
+    bar.close(py);
+    let out = out.map_err(|e| vpl_err(format!("backend gpu: {e}")))?;
+    Ok((vectors(py, out.iter().map(|t| t.mean)), vectors(py, out.iter().map(|t| t.stderr))))
+}
+
+#[cfg(not(feature = "gpu"))]
+fn track_on_device<'py>(_: Python<'py>, _: TrackJob<'_>, _: bool) -> PyResult<MeansAndErrors<'py>> {
+    Err(vpl_err("backend gpu: this build of vpl has no GPU backend (build vpl-python with its default feature `gpu`)"))
+}
+
 /// Many paths through a few pixels (the papers' per-pixel ground truth):
 /// `pixels` is a list of (x, y); returns `(mean, stderr)`, float32 arrays of
 /// shape (n, 3). `footprint="box"` spreads the camera rays over each
@@ -88,8 +118,12 @@ pub fn render_path<'py>(
 /// for any thread count. Releases the GIL; Ctrl-C stops it (each thread
 /// ends its batch of 4096 paths) and raises KeyboardInterrupt;
 /// `progress=True` shows a tqdm bar over the batches when tqdm is installed.
+/// `backend="gpu"` samples on the GPU (`vpl_gpu::GpuTracker`: the same
+/// estimator over other streams, diffuse materials only, so with
+/// `materials="diffuse"` on scenes with layered ones); Ctrl-C stops it
+/// between its submissions.
 #[pyfunction]
-#[pyo3(signature = (scene, pixels, spp = 4096, mode = "full", max_depth = 5, size = None, seed = 0, footprint = "box", materials = "as-is", progress = false))]
+#[pyo3(signature = (scene, pixels, spp = 4096, mode = "full", max_depth = 5, size = None, seed = 0, footprint = "box", materials = "as-is", progress = false, backend = "cpu"))]
 #[allow(clippy::too_many_arguments)] // the Python signature: keyword arguments with defaults
 pub fn track<'py>(
     py: Python<'py>,
@@ -103,6 +137,7 @@ pub fn track<'py>(
     footprint: &str,
     materials: &str,
     progress: bool,
+    backend: &str,
 ) -> PyResult<MeansAndErrors<'py>> {
     if spp == 0 || max_depth == 0 {
         return Err(vpl_err("spp and max_depth must be at least 1"));
@@ -121,20 +156,18 @@ pub fn track<'py>(
     let policy = policy(materials)?;
     let sc = scene.scene.with_material_policy(policy);
     let frame = scene.frame as u64;
+    let request = TrackRequest { pixels: &pixels, spp, seed, frame, footprint };
     let done = AtomicU64::new(0);
+    if backend == "gpu" {
+        return track_on_device(py, (&sc, &camera, &pt, &request), progress);
+    }
+    if backend != "cpu" {
+        return Err(vpl_err(format!("unknown backend '{backend}' (cpu, gpu)")));
+    }
     let mut bar = Progress::new(py, progress, pixels.len() as u64 * spp.div_ceil(vpl_pathtrace::TRACK_BATCH) as u64, "tracking")?;
     let out = interruptible(
         py,
-        |cancel| {
-            track_cancellable(
-                &sc,
-                &camera,
-                &pt,
-                &TrackRequest { pixels: &pixels, spp, seed, frame, footprint },
-                &|d, _| _ = done.fetch_max(d, Ordering::Relaxed),
-                cancel,
-            )
-        },
+        |cancel| track_cancellable(&sc, &camera, &pt, &request, &|d, _| _ = done.fetch_max(d, Ordering::Relaxed), cancel),
         |py| bar.update(py, done.load(Ordering::Relaxed)),
     )?;
     bar.close(py);

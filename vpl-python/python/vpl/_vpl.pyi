@@ -137,6 +137,7 @@ def track(
     footprint: str = "box",
     materials: str = "as-is",
     progress: bool = False,
+    backend: str = "cpu",
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
 def render_progressive(
     scene: Scene,

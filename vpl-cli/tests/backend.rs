@@ -128,3 +128,40 @@ fn table2_on_the_gpu_times_the_devices_smc() {
     assert!(parts <= 1.5 * row["sampling_total"].as_f64().unwrap(), "{row}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `vpl track --backend gpu` writes the CSV of `--backend cpu` with the
+/// device's estimate: per pixel and channel |Δm| / √(se₁² + se₂²) ≤ 4 (the
+/// same estimator over other streams; 12 comparisons, fixed seeds), the
+/// same samples; a scene with layered materials is refused (exit 2) until
+/// `--materials diffuse`.
+#[test]
+fn track_on_the_gpu_agrees_with_the_cpu() {
+    let csv = |backend: &str, scene: &str, extra: &[&str]| {
+        let base =
+            ["track", "--scene", scene, "--pixel", "10,10", "--pixel", "100,50", "--pixel", "150,80", "--spp", "8192", "--size", "160x90"];
+        std::process::Command::new(env!("CARGO_BIN_EXE_vpl")).args(base).args(["--backend", backend]).args(extra).output().unwrap()
+    };
+    let gpu = csv("gpu", "office", &[]);
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    if !gpu.status.success() && !std::env::var("VPL_REQUIRE_GPU").is_ok_and(|v| v == "1") && stderr.contains("adapter") {
+        return eprintln!("skipped: {stderr}");
+    }
+    assert!(gpu.status.success(), "{stderr}");
+    let cpu = csv("cpu", "office", &[]);
+    let rows = |o: &std::process::Output| -> Vec<Vec<f64>> {
+        String::from_utf8_lossy(&o.stdout).lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect()
+    };
+    let (g, c) = (rows(&gpu), rows(&cpu));
+    assert_eq!(g.len(), 3);
+    for (a, b) in g.iter().zip(&c) {
+        assert_eq!((a[0], a[1], a[8]), (b[0], b[1], b[8]));
+        for ch in 2..5 {
+            let se = (a[ch + 3].powi(2) + b[ch + 3].powi(2)).sqrt();
+            assert!(se > 0.0 && (a[ch] - b[ch]).abs() <= 4.0 * se, "pixel {},{}: {} vs {} ± {se}", a[0], a[1], a[ch], b[ch]);
+        }
+    }
+    let layered = csv("gpu", "glass", &[]);
+    assert_eq!(layered.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&layered.stderr).contains("--materials diffuse"));
+    assert!(csv("gpu", "glass", &["--materials", "diffuse"]).status.success());
+}

@@ -34,7 +34,9 @@ pub(crate) struct Params {
     /// `track`: the first chunk of a dispatch, and chunks per pixel.
     pub(crate) first: u32,
     pub(crate) chunks: u32,
-    pub(crate) pad: [u32; 2],
+    /// `track_sum`: chunks a block adds (a power of two, at most 64).
+    pub(crate) block: u32,
+    pub(crate) pad: u32,
 }
 
 /// The WGSL of the radiosity kernels and of what reads lights as they do
@@ -175,7 +177,8 @@ pub(crate) fn light_params(scene: &Scene) -> Params {
         g_max: -1.0,
         first: 0,
         chunks: 0,
-        pad: [0; 2],
+        block: 0,
+        pad: 0,
     }
 }
 

@@ -11,7 +11,7 @@
 // vpl_pathtrace::track_chunk (PathTracer::li through a pixel): one
 // invocation a chunk of a pixel's samples, writing the chunk's sum, sample
 // count and sum of squares to out_l. A pixel's chunks are padded to whole
-// blocks of BLOCK (the padding takes no samples); `track_sum` then adds
+// blocks of `block` (the padding takes no samples); `track_sum` then adds
 // each block's chunks in order into out_sum, which is what crosses back.
 // jobs holds the camera (five rows, as camera_ray_of reads them, the
 // footprint in raster.w: 0 the centre, 1 the box) and then one row a
@@ -49,7 +49,8 @@ struct Params {
     // `track`: the first chunk of this dispatch, and chunks per pixel.
     first: u32,
     chunks: u32,
-    pad0: u32,
+    // `track_sum`: chunks a block adds (a power of two, at most 64).
+    block: u32,
     pad1: u32,
 }
 
@@ -67,8 +68,6 @@ const FRAC_1_PI: f32 = 0.31830987;
 const TWO_PI: f32 = 6.2831855;
 // Samples a chunk of `track` (vpl_pathtrace::TRACK_CHUNK).
 const CHUNK: u32 = 8u;
-// Chunks `track_sum` adds into one block.
-const BLOCK: u32 = 64u;
 
 fn power_heuristic(pa: f32, pb: f32) -> f32 {
     let a = pa * pa;
@@ -429,17 +428,18 @@ fn track(@builtin(global_invocation_id) id: vec3<u32>) {
     out_l[2u * j + 1u] = vec4<f32>(sum_sq, 0.0);
 }
 
-// Block b of a `track` dispatch: its BLOCK chunks' sums, counts and sums of
-// squares added in chunk order.
+// Block b of a `track` dispatch: its `block` chunks' sums, counts and sums
+// of squares added in chunk order.
 @compute @workgroup_size(64)
 fn track_sum(@builtin(global_invocation_id) id: vec3<u32>) {
     let b = id.x + id.y * params.sum_row;
-    if (b * BLOCK >= params.jobs) { return; }
+    let m = params.block;
+    if (b * m >= params.jobs) { return; }
     var s = vec4<f32>(0.0);
     var s2 = vec4<f32>(0.0);
-    for (var i = 0u; i < BLOCK; i = i + 1u) {
-        s = s + out_l[2u * (b * BLOCK + i)];
-        s2 = s2 + out_l[2u * (b * BLOCK + i) + 1u];
+    for (var i = 0u; i < m; i = i + 1u) {
+        s = s + out_l[2u * (b * m + i)];
+        s2 = s2 + out_l[2u * (b * m + i) + 1u];
     }
     out_sum[2u * b] = s;
     out_sum[2u * b + 1u] = s2;

@@ -15,13 +15,15 @@ use vpl_core::rng::stream_key;
 use vpl_core::{Camera, Purpose, Scene};
 use vpl_pathtrace::{Accumulator, Footprint, PathTracer, TRACK_CHUNK, TrackRequest, TrackedPixel};
 
-/// Chunks one block adds up on the device (`track_sum` in `radiosity.wgsl`).
-const BLOCK: u64 = 64;
+/// Most chunks one block adds up on the device (`track_sum` in
+/// `radiosity.wgsl`); a pixel of fewer chunks gets blocks of the next power
+/// of two of them, so that padding never doubles its work.
+const MAX_BLOCK: u64 = 64;
 
 /// Chunks one submission samples at most, a whole number of blocks: a
 /// bounded time on the device (a watchdog stops long submissions on some
-/// systems) and 32 KiB of block sums back.
-const CHUNKS_PER_SUBMISSION: u64 = 1024 * BLOCK;
+/// systems) and at most 2 MiB of block sums back.
+const CHUNKS_PER_SUBMISSION: u64 = 1 << 16;
 
 /// [`vpl_pathtrace::track_with`]'s estimator on a [`Gpu`]: the camera ray
 /// through the pixel (its centre or a uniform point of it) and the lens,
@@ -32,7 +34,7 @@ const CHUNKS_PER_SUBMISSION: u64 = 1024 * BLOCK;
 /// The samples of a pixel are split into chunks of [`TRACK_CHUNK`]; one
 /// invocation takes a chunk from its own stream
 /// ([`vpl_pathtrace::track_chunk`]: the same draws in the same order). A
-/// second kernel adds blocks of 64 chunks in chunk order (`f32`, 512
+/// second kernel adds blocks of up to 64 chunks in chunk order (`f32`, 512
 /// samples), and the host adds the blocks in order in `f64`: 32 B cross
 /// back per 512 samples. So a result depends on the request alone,
 /// not on the device's threads, and differs from `track_chunk`'s only by
@@ -95,6 +97,12 @@ impl GpuTracker {
         self.track_cancellable(scene, camera, pt, request, &|_, _| {}, &AtomicBool::new(false))
     }
 
+    /// The chunks `request` takes, padding included: what the progress of
+    /// [`GpuTracker::track_cancellable`] counts up to.
+    pub fn chunks(request: &TrackRequest) -> u64 {
+        request.pixels.len() as u64 * layout(request.spp).1
+    }
+
     /// [`GpuTracker::track`] that reports `progress(chunks done, chunks)`
     /// after each submission (up to 65,536 chunks of [`TRACK_CHUNK`]
     /// samples, padding included) and stops before the next once `cancel`
@@ -122,8 +130,7 @@ impl GpuTracker {
         }
         let spp = request.spp;
         let (min_k, max_k) = pt.mode.k_range(pt.max_depth);
-        // A pixel's chunks, padded to whole blocks.
-        let chunks = (spp.div_ceil(TRACK_CHUNK) as u64).next_multiple_of(BLOCK);
+        let (block, chunks) = layout(spp);
         let total = pixels.len() as u64 * chunks;
         if pt.max_depth == 0 || min_k > max_k || spp == 0 || pixels.is_empty() {
             // No path counts (the CPU's `li` is zero): every sample is zero.
@@ -152,7 +159,7 @@ impl GpuTracker {
         let key = stream_key(request.seed, request.frame, Purpose::TRACKED_CHUNK);
         let b_rows = storage_init(ctx, "track jobs", &rows);
         let b_key = storage_init(ctx, "track key", &[key as u32, (key >> 32) as u32]);
-        let mut blocks: Vec<[Vec4; 2]> = Vec::with_capacity((total / BLOCK) as usize);
+        let mut blocks: Vec<[Vec4; 2]> = Vec::with_capacity((total / block) as usize);
         let mut first = 0u64;
         while first < total {
             if cancel.load(Ordering::Relaxed) {
@@ -160,7 +167,7 @@ impl GpuTracker {
             }
             let n = (total - first).min(CHUNKS_PER_SUBMISSION);
             let groups = groups_1d(ctx, n, 64);
-            let sum_groups = groups_1d(ctx, n / BLOCK, 64);
+            let sum_groups = groups_1d(ctx, n / block, 64);
             let params = crate::radiosity::Params {
                 jobs: n as u32,
                 paths: spp,
@@ -172,11 +179,12 @@ impl GpuTracker {
                 g_max: pt.clamp.map_or(-1.0, |c| c.g_max),
                 first: first as u32,
                 chunks: chunks as u32,
+                block: block as u32,
                 ..light_params(scene)
             };
             let b_params = uniform(ctx, "track params", &params);
             let b_chunks = storage(ctx, "track chunks", n * 32)?;
-            let b_blocks = storage(ctx, "track blocks", n / BLOCK * 32)?;
+            let b_blocks = storage(ctx, "track blocks", n / block * 32)?;
             let group = bind(
                 ctx,
                 "track",
@@ -186,12 +194,12 @@ impl GpuTracker {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             dispatch(&mut enc, &kernels.track, &[&gs.group, &group], groups);
             dispatch(&mut enc, &kernels.track_sum, &[&gs.group, &group], sum_groups);
-            blocks.extend(finish_read::<[Vec4; 2]>(ctx, enc, &b_blocks, (n / BLOCK) as usize)?);
+            blocks.extend(finish_read::<[Vec4; 2]>(ctx, enc, &b_blocks, (n / block) as usize)?);
             first += n;
             progress(first, total);
         }
-        let per_pixel = (chunks / BLOCK) as usize;
-        let block_samples = BLOCK * TRACK_CHUNK as u64;
+        let per_pixel = (chunks / block) as usize;
+        let block_samples = block * TRACK_CHUNK as u64;
         let mut out = Vec::with_capacity(pixels.len());
         for (p, &pixel) in pixels.iter().enumerate() {
             let mut acc = Accumulator::default();
@@ -208,4 +216,12 @@ impl GpuTracker {
         }
         Ok(out)
     }
+}
+
+/// The block size of `spp` samples a pixel (a power of two, at most
+/// [`MAX_BLOCK`] chunks), and the pixel's chunks padded to whole blocks.
+fn layout(spp: u32) -> (u64, u64) {
+    let chunks = spp.div_ceil(TRACK_CHUNK) as u64;
+    let block = chunks.next_power_of_two().clamp(1, MAX_BLOCK);
+    (block, chunks.next_multiple_of(block))
 }

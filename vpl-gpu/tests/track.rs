@@ -105,7 +105,8 @@ fn gpu_tracked_pixels_add_their_chunks() {
         let got = tracker
             .track_cancellable(&s.scene, &camera, &pt, &request, &|d, t| calls.lock().unwrap().push((d, t)), &AtomicBool::new(false))
             .unwrap();
-        let chunks = 3 * (spp.div_ceil(TRACK_CHUNK) as u64).next_multiple_of(64);
+        let chunks = GpuTracker::chunks(&request);
+        assert_eq!(chunks, 3 * (spp.div_ceil(TRACK_CHUNK) as u64).next_multiple_of(64));
         let calls = calls.into_inner().unwrap();
         assert_eq!(calls.last(), Some(&(chunks, chunks)), "{calls:?}");
         assert_eq!(calls.len() as u64, chunks.div_ceil(65_536), "{calls:?}");

@@ -93,8 +93,7 @@ fn track_on_device<'py>(py: Python<'py>, (scene, camera, pt, request): TrackJob<
     let tracker =
         TRACKER.get_or_init(|| vpl_gpu::Gpu::new().map(vpl_gpu::GpuTracker::new).map_err(|e| e.to_string())).as_ref().map_err(vpl_err)?;
     let done = AtomicU64::new(0);
-    let chunks = request.pixels.len() as u64 * (request.spp.div_ceil(vpl_pathtrace::TRACK_CHUNK) as u64).next_multiple_of(64);
-    let mut bar = Progress::new(py, progress, chunks, "tracking on the GPU")?;
+    let mut bar = Progress::new(py, progress, vpl_gpu::GpuTracker::chunks(request), "tracking on the GPU")?;
     let out = interruptible(
         py,
         |cancel| tracker.track_cancellable(scene, camera, pt, request, &|d, _| _ = done.fetch_max(d, Ordering::Relaxed), cancel),

@@ -39,6 +39,8 @@ fn gpu_truth_matches_the_cpu_truth_on_every_sequence() {
         for frame in [*start, (start + end) / 2] {
             let (a, b) = (cpu.unit(&cpu_spec, &row, frame).unwrap(), gpu.unit(&gpu_spec, &row, frame).unwrap());
             assert_eq!((a.mean.len(), b.samples), (b.mean.len(), 4096));
+            // The unit names the adapter that made it (cost.md quotes it).
+            assert!(a.device.is_none() && b.device.as_ref().is_some_and(|d| !d.is_empty()));
             for p in 0..a.mean.len() {
                 for c in 0..3 {
                     let (ma, mb) = (a.mean[p][c] as f64, b.mean[p][c] as f64);

@@ -21,6 +21,9 @@ pub struct FullEstimate {
     /// Sequences of the run that the full profile also has (the others are
     /// not counted).
     pub rows: Vec<String>,
+    /// The adapter that path-traced the run's truth (`None`: the CPU).
+    #[serde(default)]
+    pub truth_device: Option<String>,
 }
 
 impl FullEstimate {
@@ -60,7 +63,7 @@ pub fn estimate(spec: &Table1Spec, runs: &[MethodUnit], truth: &TruthSeconds, fu
             _ => None,
         };
     }
-    (!rows.is_empty()).then_some(FullEstimate { method_seconds, truth_seconds, rows })
+    (!rows.is_empty()).then_some(FullEstimate { method_seconds, truth_seconds, rows, truth_device: None })
 }
 
 /// The median of a unit's per-frame total times after its first frame, in

@@ -416,6 +416,10 @@ pub struct TruthUnit {
     /// older versions).
     #[serde(default)]
     pub setup_seconds: f64,
+    /// The adapter that path-traced it (`--backend gpu`); `None` on the CPU
+    /// and in units of older versions.
+    #[serde(default)]
+    pub device: Option<String>,
 }
 
 /// One method's run of a sequence.
@@ -746,6 +750,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
     let mut rows_out = Vec::new();
     let mut runs = Vec::new();
     let mut truth_seconds: estimate::TruthSeconds = Vec::new();
+    let mut truth_device: Option<String> = None;
     for (ri, run) in spec.rows.iter().enumerate() {
         let mut row_truth = Some((0.0, 0.0));
         let row = rows::row(&run.id).expect("validated");
@@ -766,6 +771,7 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
             }
             let setup = t.setup_seconds.clamp(0.0, t.seconds);
             row_truth = row_truth.filter(|_| t.seconds > 0.0).map(|(a, b)| (a + setup, b + t.seconds - setup));
+            truth_device = truth_device.or(t.device);
             truth.push(t.mean.iter().map(|m| tone_mapped_luminance(Vec3::from(*m))).collect::<Vec<f64>>());
             for (m, s) in t.mean.iter().zip(&t.stderr) {
                 se_sum += tone_mapped_stderr(Vec3::from(*m), Vec3::from(*s));
@@ -844,7 +850,10 @@ pub fn collect(dir: &Path) -> Result<(Table1Results, Vec<MethodUnit>, Option<est
             comparisons,
         });
     }
-    let full_estimate = Table1Spec::full().ok().and_then(|full| estimate::estimate(&spec, &runs, &truth_seconds, &full));
+    let full_estimate = Table1Spec::full()
+        .ok()
+        .and_then(|full| estimate::estimate(&spec, &runs, &truth_seconds, &full))
+        .map(|e| estimate::FullEstimate { truth_device, ..e });
     Ok((Table1Results { spec, rows: rows_out }, runs, full_estimate))
 }
 

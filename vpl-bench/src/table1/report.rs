@@ -343,11 +343,12 @@ pub fn estimate_line(e: &super::estimate::FullEstimate) -> String {
     let h = |s: f64| s / 3600.0;
     match e.truth_seconds {
         Some(t) => format!(
-            "{:.1} h for the full profile of these methods on {} ({:.1} h method runs, {:.1} h ground truth)",
+            "{:.1} h for the full profile of these methods on {} ({:.1} h method runs, {:.1} h ground truth{})",
             h(e.total_seconds()),
             e.rows.join(", "),
             h(e.method_seconds),
-            h(t)
+            h(t),
+            e.truth_device.as_ref().map_or(String::new(), |d| format!(" on {d}"))
         ),
         None => format!(
             "{:.1} h of method runs for the full profile of these methods on {} (ground truth not timed)",

@@ -51,10 +51,10 @@ impl Truth {
             frame: frame as u64,
             footprint: Footprint::Centre,
         };
-        let (tracked, setup_seconds) = match spec.backend {
+        let (tracked, setup_seconds, device) = match spec.backend {
             BackendKind::Cpu => {
                 let setup_seconds = start.elapsed().as_secs_f64();
-                (track_with(&scene, &camera, &pt, &request), setup_seconds)
+                (track_with(&scene, &camera, &pt, &request), setup_seconds, None)
             }
             BackendKind::Gpu => self.on_device(&scene, &camera, &pt, &request, start)?,
         };
@@ -67,6 +67,7 @@ impl Truth {
             samples: spec.truth_spp as u64,
             seconds: start.elapsed().as_secs_f64(),
             setup_seconds,
+            device,
         })
     }
 
@@ -78,7 +79,7 @@ impl Truth {
         pt: &PathTracer,
         request: &TrackRequest,
         start: Instant,
-    ) -> Result<(Vec<TrackedPixel>, f64), Table1Error> {
+    ) -> Result<(Vec<TrackedPixel>, f64, Option<String>), Table1Error> {
         let device = |e: vpl_gpu::GpuError| Table1Error::Invalid(format!("--backend gpu: ground truth: {e}"));
         if self.gpu.is_none() {
             self.gpu = Some(vpl_gpu::GpuTracker::new(vpl_gpu::Gpu::new().map_err(device)?));
@@ -87,7 +88,8 @@ impl Truth {
         // The upload (kept while the geometry is the same) is set-up, not sampling.
         tracker.gpu().scene(scene).map_err(device)?;
         let setup_seconds = start.elapsed().as_secs_f64();
-        Ok((tracker.track(scene, camera, pt, request).map_err(device)?, setup_seconds))
+        let adapter = tracker.gpu().ctx().describe();
+        Ok((tracker.track(scene, camera, pt, request).map_err(device)?, setup_seconds, Some(adapter)))
     }
 
     #[cfg(not(feature = "gpu"))]
@@ -98,7 +100,7 @@ impl Truth {
         _: &PathTracer,
         _: &TrackRequest,
         _: Instant,
-    ) -> Result<(Vec<TrackedPixel>, f64), Table1Error> {
+    ) -> Result<(Vec<TrackedPixel>, f64, Option<String>), Table1Error> {
         Err(Table1Error::Invalid("--backend gpu: build vpl-bench with its default feature `gpu`".into()))
     }
 }

@@ -156,10 +156,18 @@ impl GpuTracker {
             Vec4::new(w as f32, h as f32, camera.lens_radius.max(0.0), boxed),
         ];
         rows.extend(pixels.iter().map(|&(x, y)| Vec4::new(x as f32, y as f32, 0.0, 0.0)));
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
+        if rows.len() as u64 * 16 > limit {
+            return Err(GpuError::Invalid(format!("{} pixels exceed the adapter's storage-buffer limit of {limit} bytes", pixels.len())));
+        }
         let key = stream_key(request.seed, request.frame, Purpose::TRACKED_CHUNK);
         let b_rows = storage_init(ctx, "track jobs", &rows);
         let b_key = storage_init(ctx, "track key", &[key as u32, (key >> 32) as u32]);
-        let mut blocks: Vec<[Vec4; 2]> = Vec::with_capacity((total / block) as usize);
+        // Each pixel's blocks, added in order as their submissions come back
+        // (so memory stays that of one submission, whatever the request).
+        let mut accs = vec![Accumulator::default(); pixels.len()];
+        let per_pixel = chunks / block;
+        let block_samples = block * TRACK_CHUNK as u64;
         let mut first = 0u64;
         while first < total {
             if cancel.load(Ordering::Relaxed) {
@@ -194,27 +202,22 @@ impl GpuTracker {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             dispatch(&mut enc, &kernels.track, &[&gs.group, &group], groups);
             dispatch(&mut enc, &kernels.track_sum, &[&gs.group, &group], sum_groups);
-            blocks.extend(finish_read::<[Vec4; 2]>(ctx, enc, &b_blocks, (n / block) as usize)?);
-            first += n;
-            progress(first, total);
-        }
-        let per_pixel = (chunks / block) as usize;
-        let block_samples = block * TRACK_CHUNK as u64;
-        let mut out = Vec::with_capacity(pixels.len());
-        for (p, &pixel) in pixels.iter().enumerate() {
-            let mut acc = Accumulator::default();
-            for (b, [s, s2]) in blocks[p * per_pixel..(p + 1) * per_pixel].iter().enumerate() {
-                let expected = block_samples.min((spp as u64).saturating_sub(b as u64 * block_samples));
+            let blocks = finish_read::<[Vec4; 2]>(ctx, enc, &b_blocks, (n / block) as usize)?;
+            for (k, [s, s2]) in blocks.iter().enumerate() {
+                let g = first / block + k as u64;
+                let (p, b) = ((g / per_pixel) as usize, g % per_pixel);
+                let expected = block_samples.min((spp as u64).saturating_sub(b * block_samples));
                 // Fewer samples than asked: the device stopped its loops early.
                 if s.w != expected as f32 {
                     return Err(GpuError::CutShort("the tracked pixels' paths"));
                 }
                 let wide = |v: Vec4| [v.x as f64, v.y as f64, v.z as f64];
-                acc.merge(&Accumulator::from_sums(expected, wide(*s), wide(*s2)));
+                accs[p].merge(&Accumulator::from_sums(expected, wide(*s), wide(*s2)));
             }
-            out.push(acc.tracked(pixel));
+            first += n;
+            progress(first, total);
         }
-        Ok(out)
+        Ok(pixels.iter().zip(&accs).map(|(&pixel, acc)| acc.tracked(pixel)).collect())
     }
 }
 

@@ -274,3 +274,77 @@ pub fn report(adapter: &str, rows: &[GpuBenchRow], frames: u32, threads: usize) 
     }
     md
 }
+
+/// Table 1's ground truth on the CPU and on the device, side by side
+/// ([`bench_truth`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TruthBench {
+    /// Table 1 sequence (its scene, first quick-profile frame, tracked pixels).
+    pub row: String,
+    /// Tracked pixels.
+    pub pixels: usize,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seconds of `vpl_pathtrace::track_with` (all CPU threads of the pool).
+    pub cpu_seconds: f64,
+    /// Seconds of [`vpl_gpu::GpuTracker::track`] (its kernels compiled and
+    /// the scene uploaded beforehand).
+    pub gpu_seconds: f64,
+}
+
+impl TruthBench {
+    /// Paths a second on the CPU and on the device.
+    pub fn paths_per_second(&self) -> (f64, f64) {
+        let n = self.pixels as f64 * self.spp as f64;
+        (n / self.cpu_seconds.max(1e-9), n / self.gpu_seconds.max(1e-9))
+    }
+}
+
+/// One truth frame of Table 1's sequence `row` (its first quick-profile
+/// frame, 320×240, indirect light to depth 5 through the pixel centres,
+/// `spp` samples at each tracked pixel), path-traced on the CPU and then
+/// on `gpu`, each timed once after a warm-up of 1/16 of the samples.
+pub fn bench_truth(gpu: &Gpu, row: &str, spp: u32) -> Result<TruthBench, BenchError> {
+    use vpl_pathtrace::{Footprint, PathTracer, TrackRequest, track_with};
+    let r = crate::table1::rows::row(row).ok_or_else(|| vpl_core::CoreError::Invalid(format!("no Table 1 sequence '{row}'")))?;
+    let setup = r.setup()?;
+    let (scene, camera) = setup.frame(r.quick_frames.start)?;
+    let scene = scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
+    let camera = camera.with_resolution((320, 240))?;
+    let pixels = r.pixels((320, 240));
+    let pt = PathTracer::new(5, vpl_core::Mode::Indirect);
+    let request = |spp: u32| TrackRequest { pixels: &pixels, spp, seed: 1, frame: 0, footprint: Footprint::Centre };
+    let tracker = vpl_gpu::GpuTracker::new(gpu.clone());
+    track_with(&scene, &camera, &pt, &request((spp / 16).max(1)));
+    tracker.track(&scene, &camera, &pt, &request((spp / 16).max(1)))?;
+    let t = Instant::now();
+    track_with(&scene, &camera, &pt, &request(spp));
+    let cpu_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    tracker.track(&scene, &camera, &pt, &request(spp))?;
+    let gpu_seconds = t.elapsed().as_secs_f64();
+    Ok(TruthBench { row: row.into(), pixels: pixels.len(), spp, cpu_seconds, gpu_seconds })
+}
+
+/// A Markdown table of [`bench_truth`] rows.
+pub fn truth_report(adapter: &str, rows: &[TruthBench], threads: usize) -> String {
+    let mut md = format!(
+        "\n## Table 1's ground truth, CPU ({threads} threads) and {adapter}\n\nOne truth frame each (320×240, indirect light, depth 5, rays through the tracked pixels' centres), timed one after the other in this run.\n\n| sequence | pixels | samples | CPU s | GPU s | CPU M paths/s | GPU M paths/s | GPU speed-up |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n"
+    );
+    for r in rows {
+        let (c, g) = r.paths_per_second();
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2}× |",
+            r.row,
+            r.pixels,
+            r.spp,
+            r.cpu_seconds,
+            r.gpu_seconds,
+            c / 1e6,
+            g / 1e6,
+            r.cpu_seconds / r.gpu_seconds.max(1e-9)
+        );
+    }
+    md
+}

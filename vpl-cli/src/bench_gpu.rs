@@ -34,6 +34,10 @@ pub(super) struct Args {
     /// paper's kNN flux, every line on the device).
     #[arg(long, value_delimiter = ',', default_value = "host,device")]
     smc: Vec<String>,
+    /// Samples per tracked pixel of the ground-truth comparison (one truth frame of
+    /// each --scene that is a Table 1 sequence, CPU and GPU side by side; 0: none).
+    #[arg(long, default_value_t = 65536)]
+    truth_spp: u32,
 }
 
 /// Runs `vpl bench-gpu`.
@@ -44,7 +48,7 @@ pub(super) fn run(args: Args, _registry: &Registry) -> Res<()> {
 /// `vpl bench-gpu`.
 #[cfg(feature = "gpu")]
 fn bench_gpu(args: Args) -> Res<()> {
-    let Args { scenes, size: Size(w, h), vpls, frames, threads, out, read_back, smc } = args;
+    let Args { scenes, size: Size(w, h), vpls, frames, threads, out, read_back, smc, truth_spp } = args;
     let (size, resident, out) = ((w, h), !read_back, out.as_deref());
     if frames == 0 || vpls == 0 {
         return Err("--frames and --vpls must be at least 1".into());
@@ -68,12 +72,20 @@ fn bench_gpu(args: Args) -> Res<()> {
             rows.push(row.map_err(|e| e.to_string())?);
         }
     }
-    let md = vpl_bench::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
+    let mut truth = Vec::new();
+    for s in scenes.iter().filter(|s| truth_spp > 0 && vpl_bench::table1::rows::row(s).is_some()) {
+        eprintln!("vpl: bench-gpu: {s} ground truth ({truth_spp} samples a pixel)");
+        truth.push(pool.install(|| vpl_bench::gpu_bench::bench_truth(&gpu, s, truth_spp)).map_err(|e| e.to_string())?);
+    }
+    let mut md = vpl_bench::gpu_bench::report(&adapter, &rows, frames, pool.current_num_threads());
+    if !truth.is_empty() {
+        md.push_str(&vpl_bench::gpu_bench::truth_report(&adapter, &truth, pool.current_num_threads()));
+    }
     println!("{md}");
     if let Some(dir) = out {
         let out = super::OutDir::create("--out", dir)?;
         vpl_core::image::write_atomic(&out.path().join("gpu_bench.md"), md.as_bytes()).map_err(|e| e.to_string())?;
-        let json = serde_json::json!({ "adapter": adapter, "frames": frames, "threads": pool.current_num_threads(), "rows": rows });
+        let json = serde_json::json!({ "adapter": adapter, "frames": frames, "threads": pool.current_num_threads(), "rows": rows, "truth": truth });
         let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
         vpl_core::image::write_atomic(&out.path().join("gpu_bench.json"), text.as_bytes()).map_err(|e| e.to_string())?;
         out.keep()?;

@@ -165,3 +165,19 @@ fn track_on_the_gpu_agrees_with_the_cpu() {
     assert!(String::from_utf8_lossy(&layered.stderr).contains("--materials diffuse"));
     assert!(csv("gpu", "glass", &["--materials", "diffuse"]).status.success());
 }
+
+/// `vpl bench-gpu` on a Table 1 sequence also times one truth frame on the
+/// CPU and on the device, side by side, into its report and JSON.
+#[test]
+fn bench_gpu_times_the_ground_truth_on_both_sides() {
+    let args =
+        ["bench-gpu", "--scene", "office", "--size", "48x36", "--vpls", "64", "--frames", "1", "--smc", "host", "--truth-spp", "512"];
+    let Some((out, dir)) = vpl_on_the_gpu("vpl-bench-gpu-truth", &args) else { return };
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("gpu_bench.json")).unwrap()).unwrap();
+    let truth = json["truth"].as_array().unwrap();
+    assert_eq!(truth.len(), 1);
+    assert_eq!((truth[0]["row"].as_str(), truth[0]["pixels"].as_u64(), truth[0]["spp"].as_u64()), (Some("office"), Some(8), Some(512)));
+    assert!(truth[0]["cpu_seconds"].as_f64().unwrap() > 0.0 && truth[0]["gpu_seconds"].as_f64().unwrap() > 0.0);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("| `office` | 8 | 512 |"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

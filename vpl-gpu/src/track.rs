@@ -17,7 +17,8 @@ use vpl_pathtrace::{Accumulator, Footprint, PathTracer, TRACK_CHUNK, TrackReques
 
 /// Most chunks one block adds up on the device (`track_sum` in
 /// `radiosity.wgsl`); a pixel of fewer chunks gets blocks of the next power
-/// of two of them, so that padding never doubles its work.
+/// of two of them, so that padding at most doubles a small request's work
+/// and adds fewer than 64 chunks to a large one's.
 const MAX_BLOCK: u64 = 64;
 
 /// Chunks one submission samples at most, a whole number of blocks: a

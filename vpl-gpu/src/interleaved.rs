@@ -239,7 +239,7 @@ impl GpuInterleavedShader {
     }
 
     fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &DeviceVisibility) -> Result<Image, GpuError> {
-        let DeviceVisibility { mode, ref scene, eps, res, bias, ref maps } = *vis;
+        let DeviceVisibility { mode, ref scene, eps, res, bias, .. } = *vis;
         let t0 = Instant::now();
         self.subset_buffers(vpls.len());
         self.kernels();
@@ -250,14 +250,7 @@ impl GpuInterleavedShader {
         let g = gpu.device_gbuffer(gbuf)?;
         let n = gbuf.width as usize * gbuf.height as usize;
         let b_vpls = storage_init(ctx, "vpls", &vpl_rows(vpls));
-        let dummy;
-        let (atlas, headers) = match maps {
-            Some((a, h)) => (a, h),
-            None => {
-                dummy = storage(ctx, "no maps", 16)?;
-                (&dummy, &dummy)
-            }
-        };
+        let (atlas, headers) = vis.map_buffers(ctx)?;
         let params = GatherParams {
             width: gbuf.width,
             height: gbuf.height,
@@ -273,7 +266,7 @@ impl GpuInterleavedShader {
         let b_params = uniform(ctx, "gather params", &params);
         let b_e = storage(ctx, "E", n as u64 * 16)?;
         let group =
-            bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, headers, atlas, &b_e]);
+            bind(ctx, "gather", &k.gather_layout, &[&b_params, &g.pos, &g.normal, &b_vpls, b_slots, b_offsets, &headers, &atlas, &b_e]);
         let t_up = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(
@@ -320,7 +313,8 @@ impl GpuInterleavedShader {
     }
 }
 
-fn image_of(width: u32, height: u32, rgba: Vec<Vec4>) -> Image {
+/// The image of `width` × `height` pixels read back as one vec4 a pixel.
+pub(crate) fn image_of(width: u32, height: u32, rgba: Vec<Vec4>) -> Image {
     Image { width, height, data: rgba.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() }
 }
 

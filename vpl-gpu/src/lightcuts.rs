@@ -3,12 +3,12 @@
 
 use crate::context::GpuError;
 use crate::device::Gpu;
-use crate::interleaved::{Modulate, vpl_rows};
+use crate::interleaved::{Modulate, image_of, vpl_rows};
 use crate::kernel::{Binding, SAMPLING_WGSL, bind, dispatch, finish, layout, pipeline, read_back, storage, storage_init, uniform};
 use crate::scene::{BVH_WGSL, scene_layout};
 use crate::visibility::DeviceVisibility;
 use std::time::Instant;
-use vpl_core::glam::{Vec3, Vec4};
+use vpl_core::glam::Vec4;
 use vpl_core::rng::{Purpose, stream_key};
 use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
 use vpl_lighttree::{Bounds, Child};
@@ -93,7 +93,7 @@ impl GpuLightcutShader {
     }
 
     fn run(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &DeviceVisibility, frame: u64) -> Result<Image, GpuError> {
-        let DeviceVisibility { mode, ref scene, eps, res, bias, ref maps } = *vis;
+        let DeviceVisibility { mode, ref scene, eps, res, bias, .. } = *vis;
         let t0 = Instant::now();
         self.kernels();
         let gpu = self.gpu.clone();
@@ -125,14 +125,7 @@ impl GpuLightcutShader {
         let b_vpls = storage_init(ctx, "vpls", &vpl_rows(vpls));
         let b_bounds = storage_init(ctx, "light tree bounds", &bounds);
         let b_children = storage_init(ctx, "light tree children", &children);
-        let dummy;
-        let (atlas, headers) = match maps {
-            Some((a, h)) => (a, h),
-            None => {
-                dummy = storage(ctx, "no maps", 16)?;
-                (&dummy, &dummy)
-            }
-        };
+        let (atlas, headers) = vis.map_buffers(ctx)?;
         let key = stream_key(self.cpu.seed, frame, Purpose::LIGHTCUT);
         let params = Params {
             width: gbuf.width,
@@ -156,7 +149,7 @@ impl GpuLightcutShader {
             ctx,
             "lightcuts",
             &k.gather_layout,
-            &[&b_params, &g.pos, &g.normal, &b_vpls, &b_bounds, &b_children, headers, atlas, &b_e],
+            &[&b_params, &g.pos, &g.normal, &b_vpls, &b_bounds, &b_children, &headers, &atlas, &b_e],
         );
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         dispatch(&mut enc, &k.gather, &[&scene.group, &group], (gbuf.width.div_ceil(8), gbuf.height.div_ceil(8), 1));
@@ -166,7 +159,7 @@ impl GpuLightcutShader {
         let t2 = Instant::now();
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         self.timings = ShadeTimings { gather_ms: ms(t0, t2), filter_ms: 0.0 };
-        Ok(Image { width: gbuf.width, height: gbuf.height, data: out.into_iter().map(|v| Vec3::new(v.x, v.y, v.z)).collect() })
+        Ok(image_of(gbuf.width, gbuf.height, out))
     }
 }
 

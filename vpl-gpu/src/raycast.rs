@@ -183,18 +183,17 @@ impl GpuRayCaster {
             return Ok((Vec::new(), None));
         }
         let groups = groups_1d(ctx, count as u64, WORKGROUP);
-        let (f, right, up, sx, sy) = camera.raster_basis();
-        let (w, h) = camera.resolution;
         let tri_only = answer == Answer::Triangles;
+        let [origin, forward, right, up, raster] = camera_rows(camera).map(Into::into);
         let params = CameraParams {
             head: BatchHead::new(count, groups, key),
             tri_only: tri_only as u32,
             pad: [0; 3],
-            origin: camera.origin.extend(0.0).into(),
-            forward: f.extend(sx).into(),
-            right: right.extend(sy).into(),
-            up: up.extend(camera.focus_distance).into(),
-            raster: [w as f32, h as f32, camera.lens_radius.max(0.0), 0.0],
+            origin,
+            forward,
+            right,
+            up,
+            raster,
         };
         // Triangles, then their t (kept on the device); or (t, triangle) pairs.
         let words = if tri_only { count } else { 2 * count };
@@ -363,4 +362,20 @@ impl vpl_core::RayCaster for GpuRays {
     fn speculates(&self) -> bool {
         true
     }
+}
+
+/// The camera as `camera_ray_of` and `camera_ray_at` (`sampling.wgsl`) read
+/// it: the origin; the forward axis with s_x; the right axis with s_y; the
+/// true up with the focus distance; the raster (width, height, lens radius,
+/// 0).
+pub(crate) fn camera_rows(camera: &Camera) -> [vpl_core::glam::Vec4; 5] {
+    let (f, right, up, sx, sy) = camera.raster_basis();
+    let (w, h) = camera.resolution;
+    [
+        camera.origin.extend(0.0),
+        f.extend(sx),
+        right.extend(sy),
+        up.extend(camera.focus_distance),
+        vpl_core::glam::Vec4::new(w as f32, h as f32, camera.lens_radius.max(0.0), 0.0),
+    ]
 }

@@ -7,6 +7,7 @@ use crate::context::GpuError;
 use crate::device::Gpu;
 use crate::kernel::{bind, dispatch, finish_read, groups_1d, pipeline, storage, storage_init, uniform};
 use crate::radiosity::{light_params, radiosity_layout, radiosity_source};
+use crate::raycast::camera_rows;
 use crate::scene::scene_layout;
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -144,18 +145,12 @@ impl GpuTracker {
         let gs = self.gpu.scene(scene)?;
         let lb = self.gpu.lights(scene);
         let kernels = self.kernel.get_or_init(|| TrackKernels::new(ctx));
-        let (f, right, up, sx, sy) = camera.raster_basis();
-        let boxed = match request.footprint {
+        // The camera, the footprint in the raster row's w (1: the box).
+        let mut rows = camera_rows(camera).to_vec();
+        rows[4].w = match request.footprint {
             Footprint::Box => 1.0,
             Footprint::Centre => 0.0,
         };
-        let mut rows = vec![
-            camera.origin.extend(0.0),
-            f.extend(sx),
-            right.extend(sy),
-            up.extend(camera.focus_distance),
-            Vec4::new(w as f32, h as f32, camera.lens_radius.max(0.0), boxed),
-        ];
         rows.extend(pixels.iter().map(|&(x, y)| Vec4::new(x as f32, y as f32, 0.0, 0.0)));
         let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
         if rows.len() as u64 * 16 > limit {

@@ -27,6 +27,20 @@ pub(crate) struct DeviceVisibility {
     pub maps: Option<(wgpu::Buffer, wgpu::Buffer)>,
 }
 
+impl DeviceVisibility {
+    /// The maps' atlas and headers, or one empty buffer standing for both
+    /// where there are none (rays: the kernels bind them but never read).
+    pub(crate) fn map_buffers(&self, ctx: &crate::GpuContext) -> Result<(wgpu::Buffer, wgpu::Buffer), crate::GpuError> {
+        Ok(match &self.maps {
+            Some((atlas, headers)) => (atlas.clone(), headers.clone()),
+            None => {
+                let none = crate::kernel::storage(ctx, "no maps", 16)?;
+                (none.clone(), none)
+            }
+        })
+    }
+}
+
 /// The visibilities alive on one device, by key: `None` until a
 /// visibility's first update has put its structures there.
 #[derive(Default)]

@@ -285,10 +285,11 @@ pub struct TruthBench {
     pub pixels: usize,
     /// Samples per pixel.
     pub spp: u32,
-    /// Seconds of `vpl_pathtrace::track_with` (all CPU threads of the pool).
+    /// Seconds of the CPU truth's sampling (`vpl_pathtrace::track_with`, all
+    /// CPU threads of the pool).
     pub cpu_seconds: f64,
-    /// Seconds of [`vpl_gpu::GpuTracker::track`] (its kernels compiled and
-    /// the scene uploaded beforehand).
+    /// Seconds of the device truth's sampling ([`vpl_gpu::GpuTracker::track`],
+    /// its kernels compiled and the scene uploaded beforehand).
     pub gpu_seconds: f64,
 }
 
@@ -301,29 +302,26 @@ impl TruthBench {
 }
 
 /// One truth frame of Table 1's sequence `row` (its first quick-profile
-/// frame, 320×240, indirect light to depth 5 through the pixel centres,
-/// `spp` samples at each tracked pixel), path-traced on the CPU and then
-/// on `gpu`, each timed once after a warm-up of 1/16 of the samples.
+/// frame, the quick profile's size and depth, `spp` samples at each tracked
+/// pixel) as the harness makes it ([`crate::table1::truth::Truth`]), on the
+/// CPU and then on `gpu`, each after a warm-up unit of 1/16 of the samples;
+/// the time is the unit's sampling, without its set-up.
 pub fn bench_truth(gpu: &Gpu, row: &str, spp: u32) -> Result<TruthBench, BenchError> {
-    use vpl_pathtrace::{Footprint, PathTracer, TrackRequest, track_with};
+    use crate::pipeline::BackendKind;
+    use crate::table1::truth::Truth;
+    use crate::table1::{Table1Error, Table1Spec};
     let r = crate::table1::rows::row(row).ok_or_else(|| vpl_core::CoreError::Invalid(format!("no Table 1 sequence '{row}'")))?;
-    let setup = r.setup()?;
-    let (scene, camera) = setup.frame(r.quick_frames.start)?;
-    let scene = scene.with_material_policy(vpl_core::MaterialPolicy::Diffuse);
-    let camera = camera.with_resolution((320, 240))?;
-    let pixels = r.pixels((320, 240));
-    let pt = PathTracer::new(5, vpl_core::Mode::Indirect);
-    let request = |spp: u32| TrackRequest { pixels: &pixels, spp, seed: 1, frame: 0, footprint: Footprint::Centre };
-    let tracker = vpl_gpu::GpuTracker::new(gpu.clone());
-    track_with(&scene, &camera, &pt, &request((spp / 16).max(1)));
-    tracker.track(&scene, &camera, &pt, &request((spp / 16).max(1)))?;
-    let t = Instant::now();
-    track_with(&scene, &camera, &pt, &request(spp));
-    let cpu_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    tracker.track(&scene, &camera, &pt, &request(spp))?;
-    let gpu_seconds = t.elapsed().as_secs_f64();
-    Ok(TruthBench { row: row.into(), pixels: pixels.len(), spp, cpu_seconds, gpu_seconds })
+    let quick = Table1Spec::quick();
+    let time = |truth: &mut Truth, backend: BackendKind| -> Result<(f64, usize), Table1Error> {
+        let spec = |truth_spp: u32| Table1Spec { truth_spp, backend, ..quick.clone() };
+        truth.unit(&spec((spp / 16).max(1)), &r, r.quick_frames.start)?;
+        let u = truth.unit(&spec(spp), &r, r.quick_frames.start)?;
+        Ok((u.seconds - u.setup_seconds, u.mean.len()))
+    };
+    let bench = |e: Table1Error| vpl_core::CoreError::Invalid(e.to_string());
+    let (cpu_seconds, pixels) = time(&mut Truth::new(), BackendKind::Cpu).map_err(bench)?;
+    let (gpu_seconds, _) = time(&mut Truth::on(gpu.clone()), BackendKind::Gpu).map_err(bench)?;
+    Ok(TruthBench { row: row.into(), pixels, spp, cpu_seconds, gpu_seconds })
 }
 
 /// A Markdown table of [`bench_truth`] rows.

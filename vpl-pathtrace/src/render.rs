@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 use vpl_core::glam::Vec3;
-use vpl_core::{Camera, Image, Purpose, Scene, stream};
+use vpl_core::{Camera, Image, Purpose, RngStream, Scene, stream};
 
 /// Side of the square tiles work is split into.
 pub const TILE: u32 = 16;
@@ -346,12 +346,7 @@ fn tracked(
                 return acc;
             }
             for _ in 0..n {
-                let (u, v) = match footprint {
-                    Footprint::Box => rng.next_2d(),
-                    Footprint::Centre => (0.5, 0.5),
-                };
-                let lens = rng.next_2d();
-                acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
+                acc.add(tracked_sample(scene, camera, pt, (x, y), footprint, &mut rng));
             }
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             acc
@@ -390,14 +385,21 @@ pub fn track_chunk(scene: &Scene, camera: &Camera, pt: &PathTracer, request: &Tr
     let n = TRACK_CHUNK.min(request.spp.saturating_sub(chunk.saturating_mul(TRACK_CHUNK)));
     let mut rng = stream(request.seed, request.frame, Purpose::TRACKED_CHUNK, ((p as u64) << 32) | chunk as u64);
     for _ in 0..n {
-        let (u, v) = match request.footprint {
-            Footprint::Box => rng.next_2d(),
-            Footprint::Centre => (0.5, 0.5),
-        };
-        let lens = rng.next_2d();
-        acc.add(pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), &mut rng));
+        acc.add(tracked_sample(scene, camera, pt, (x, y), request.footprint, &mut rng));
     }
     acc
+}
+
+/// One sample of pixel (x, y): the point in the pixel ([`Footprint`]), the
+/// lens sample, then the path, drawn from `rng` in that order.
+#[inline]
+fn tracked_sample(scene: &Scene, camera: &Camera, pt: &PathTracer, (x, y): (u32, u32), footprint: Footprint, rng: &mut RngStream) -> Vec3 {
+    let (u, v) = match footprint {
+        Footprint::Box => rng.next_2d(),
+        Footprint::Centre => (0.5, 0.5),
+    };
+    let lens = rng.next_2d();
+    pt.li(scene, camera.ray(x as f32 + u, y as f32 + v, lens), rng)
 }
 
 #[cfg(test)]

@@ -25,6 +25,12 @@ impl Truth {
         Truth::default()
     }
 
+    /// No scene loaded; units of the GPU backend run on `gpu`.
+    #[cfg(feature = "gpu")]
+    pub fn on(gpu: vpl_gpu::Gpu) -> Truth {
+        Truth { gpu: Some(vpl_gpu::GpuTracker::new(gpu)), ..Truth::default() }
+    }
+
     /// The truth unit of `row`'s frame `frame`: `spec.truth_spp` samples
     /// through each tracked pixel's centre, indirect light to the spec's
     /// depth, materials drawn as the VPL methods draw them. The unit

@@ -3,10 +3,12 @@
 //! hit's nearest other hit (line 6's weights), and each probe's nearest
 //! VPL on its own surface (normals within 60°), over points on the six
 //! faces of a room, where a probe near a corner has VPLs of another
-//! surface nearest.
+//! surface nearest. The queries run on all threads, one walk each or
+//! together.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
+use rayon::prelude::*;
 use vpl_density::KnnDensity;
 
 /// `n` points on the faces of a 10 × 3 × 8 room, with their normals
@@ -47,7 +49,10 @@ fn bench(c: &mut Criterion) {
     let tree = KnnDensity::new(&sites).unwrap();
     tree.member_nearest();
     g.bench_function("nearest on the same surface, 10700 probes of 2048 VPLs", |b| {
-        b.iter(|| probes.iter().zip(&probe_n).filter_map(|(&p, &n)| tree.nearest_accepted(p, None, |i| site_n[i].dot(n) > 0.5)).count())
+        b.iter(|| probes.par_iter().zip(&probe_n).filter_map(|(&p, &n)| tree.nearest_accepted(p, None, |i| site_n[i].dot(n) > 0.5)).count())
+    });
+    g.bench_function("nearest on the same surface, 10700 probes of 2048 VPLs at once", |b| {
+        b.iter(|| tree.nearest_accepted_each(&probes, |q, i| site_n[i].dot(probe_n[q]) > 0.5).into_iter().flatten().count())
     });
     g.finish();
 }

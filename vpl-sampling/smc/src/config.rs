@@ -149,6 +149,9 @@ impl SmcConfig {
         if self.probes_per_vpl == 0 {
             return Err(SmcError::Invalid("the area probes need at least 1 probe per VPL"));
         }
+        if self.flux == FluxEstimator::VoronoiNear && self.placement != Placement::Site {
+            return Err(SmcError::Invalid("flux=voronoi-near measures its cells at the VPLs' own points: it needs placement=site"));
+        }
         if self.vpls.checked_mul(self.resample_ratio).is_none_or(|n| n > 1 << 28) {
             return Err(SmcError::Invalid("I times the resample ratio must be at most 2^28"));
         }
@@ -183,7 +186,7 @@ impl SmcConfig {
         ParamKey {
             key: "flux",
             default: "voronoi",
-            about: "area per VPL in its flux: voronoi (cells measured by candidate hits), knn (the paper's eq. 7) or knn-calibrated",
+            about: "area per VPL in its flux: voronoi (cells measured by candidate hits), voronoi-near (the cell's probes, each standing for the area of those near the VPL), voronoi-site (the cell's area times the VPL's own radiance), knn (the paper's eq. 7) or knn-calibrated",
         },
         ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
         ParamKey {

@@ -731,6 +731,10 @@ impl SmcSampler {
                     slots.iter().zip(&cells).map(|(&s, c)| c.radiance(self.config.relight, particle(s).radiance) * c.area as f32).collect();
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
+                    FluxEstimator::VoronoiNear => {
+                        let near = self.probes.near_ratios(&sites);
+                        slots.iter().zip(by_cell).zip(near).for_each(|((&s, f), r)| flux[s] = f * r as f32)
+                    }
                     FluxEstimator::VoronoiSite => {
                         slots.iter().zip(&cells).for_each(|(&s, c)| flux[s] = particle(s).radiance * c.area as f32)
                     }

@@ -58,8 +58,12 @@ proptest! {
         let name = ["cornell", "office", "maze", "atrium"][scene_i];
         let setup = vpl_scene_io::load(name).unwrap();
         let count = setup.sequence.as_ref().map_or(1, |s| s.frame_count());
-        let placement = if centroid { vpl_smc::Placement::Centroid } else { vpl_smc::Placement::Site };
-        let mut s = SmcSampler::new(SmcConfig { vpls: 256, m_max, warmup: 2, placement, ..SmcConfig::default() }).unwrap();
+        let (placement, flux) = if centroid {
+            (vpl_smc::Placement::Centroid, vpl_smc::FluxEstimator::Voronoi)
+        } else {
+            (vpl_smc::Placement::Site, vpl_smc::FluxEstimator::default())
+        };
+        let mut s = SmcSampler::new(SmcConfig { vpls: 256, m_max, warmup: 2, placement, flux, ..SmcConfig::default() }).unwrap();
         let mut prev: Option<Vec<Option<(Vec3, u64)>>> = None;
         for (k, f) in [f0 % count, f0 % count, f1 % count, f1 % count, (f1 + 1) % count].into_iter().enumerate() {
             let (scene, camera) = setup.frame(f).unwrap();
@@ -383,16 +387,17 @@ fn selection_does_not_bias_the_vpl_radiosities() {
     }
 }
 
-/// The Voronoi-cell flux (the default) against path tracing, where the
-/// paper's kNN flux is too bright, with the VPLs shining from their own
-/// points (the default) and from near their cells' centroids
+/// The Voronoi-cell flux against path tracing, where the paper's kNN flux
+/// is too bright, with the VPLs shining from their own points (the
+/// default) and from near their cells' centroids
 /// (`Placement::Centroid`), and (printed) from a probe of their cells
 /// drawn by area (`Placement::Random`): unclamped, ray-traced, exhaustive indirect
 /// light with I = 2048 after the 100-iteration warm-up, at the default
 /// cameras of `cornell` (64×64, its square image), `office` and `atrium`
-/// (64×48).
+/// (64×48); and the default flux, those cells with the areas near the
+/// VPLs (`FluxEstimator::VoronoiNear`), at the VPLs' own points.
 ///
-/// Bound: for each placement, the image mean over seeds 0–2 is within 3 %
+/// Bound: for each placement, and for the default, the image mean over seeds 0–2 is within 3 %
 /// of path tracing's (the target of the flux; at 96×72 through `vpl render`
 /// the sites give 0.997, 1.019 and 0.999, the centroids 1.000, 1.018 and
 /// 0.996). The path tracer's 512 samples a pixel put its own standard
@@ -430,6 +435,10 @@ fn the_cell_flux_matches_path_tracing_where_the_knn_flux_is_too_bright() {
                 assert!((mean - 1.0).abs() < 0.03, "{name}: the cell flux at {placement} gives {mean:.3} of path tracing's image mean");
             }
         }
+        let near: Vec<f64> = (0..3).map(|seed| ratio(FluxEstimator::VoronoiNear, Placement::Site, seed)).collect();
+        let mean = near.iter().sum::<f64>() / 3.0;
+        eprintln!("{name}: SMC / path tracing, the default (cells with the areas near the VPLs) {near:.3?} (mean {mean:.3})");
+        assert!((mean - 1.0).abs() < 0.03, "{name}: the default flux gives {mean:.3} of path tracing's image mean");
         let knn = ratio(FluxEstimator::Knn, Placement::Site, 0);
         eprintln!("{name}: kNN {knn:.3}");
         if name != "office" {

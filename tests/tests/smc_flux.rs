@@ -18,7 +18,7 @@ use vpl_core::image::luminance;
 use vpl_core::{Camera, CpuRays, Frame, GBuffer, RadiosityEstimator, Scene, SceneSetup, VplSampler};
 use vpl_density::KnnDensity;
 use vpl_pathtrace::PathRadiosity;
-use vpl_smc::{SmcConfig, SmcSampler, camera_points, candidate_hits, surface_neighbour_sq};
+use vpl_smc::{FluxEstimator, SmcConfig, SmcSampler, camera_points, candidate_hits, surface_neighbour_sq};
 
 /// VPLs of the sampler (its candidate rays are 16 times as many).
 const VPLS: usize = 512;
@@ -28,9 +28,11 @@ const SEEDS: u64 = 8;
 const BATCHES: u64 = 16;
 
 /// Σ_i luminance(Φ_i) of the first frame the sampler draws (warm-up and the
-/// frame's own iteration), default settings but I.
+/// frame's own iteration), with the cell flux that partitions the light
+/// ([`FluxEstimator::Voronoi`]; the default weighs it by what the camera
+/// sees, see `vpl_smc::flux`), default settings but I.
 fn flux_sum(scene: &Scene, camera: &Camera, seed: u64) -> (f64, f64) {
-    let mut s = SmcSampler::new(SmcConfig { vpls: VPLS, ..SmcConfig::default() }).unwrap();
+    let mut s = SmcSampler::new(SmcConfig { vpls: VPLS, flux: FluxEstimator::Voronoi, ..SmcConfig::default() }).unwrap();
     let gbuffer = GBuffer::empty();
     let set = s.next_frame(&Frame { scene, camera, time: 0.0, index: 0, seed, gbuffer: &gbuffer, previous: None });
     let sum = set.iter().map(|(_, v)| luminance(v.flux) as f64).sum();

@@ -46,6 +46,11 @@ pub struct EnergySettings {
     pub size: (u32, u32),
     /// Seeds `seed`, `seed + 1`, … of the sampler (the path tracer uses `seed`).
     pub seeds: u32,
+    /// Seeds rendered at frame 0, at least `seeds`: those past `seeds`
+    /// render frame 0 alone (after the warm-up). One seed's image mean
+    /// varies more at one frame than over a sequence's checkpoints, and
+    /// frame 0 costs no walk along the sequence.
+    pub frame0_seeds: u32,
     /// First seed.
     pub seed: u64,
     /// Checkpoints spread over the sequence (the centres of as many equal
@@ -73,6 +78,7 @@ impl Default for EnergySettings {
             vpls: 2048,
             size: (64, 48),
             seeds: 3,
+            frame0_seeds: 3,
             seed: 0,
             checkpoints: 6,
             stride: 1,
@@ -107,6 +113,8 @@ pub struct EnergyRun {
     pub frames: Vec<Checkpoint>,
     /// Seconds the run took.
     pub seconds: f64,
+    /// The seeds that walked the sequence (the first ones of frame 0's).
+    pub walked: usize,
 }
 
 /// A mean over seeds and its standard error (0 with one seed).
@@ -145,17 +153,27 @@ impl Estimate {
 }
 
 impl EnergyRun {
-    fn seeds(&self) -> usize {
-        self.frames.first().map_or(0, |f| f.unclamped.len())
-    }
-
-    /// Per seed, the mean of `f(checkpoint, seed)` over `frames`.
+    /// Per seed that rendered every one of `frames`, the mean of
+    /// `f(checkpoint, seed)` over them.
     fn per_seed(&self, frames: &[Checkpoint], f: impl Fn(&Checkpoint, usize) -> f64) -> Vec<f64> {
-        (0..self.seeds()).map(|s| frames.iter().map(|c| f(c, s)).sum::<f64>() / frames.len() as f64).collect()
+        let seeds = frames.iter().map(|c| c.unclamped.len()).min().unwrap_or(0);
+        (0..seeds).map(|s| frames.iter().map(|c| f(c, s)).sum::<f64>() / frames.len() as f64).collect()
     }
 
+    /// The checkpoints; frame 0 where there are none (with the seeds that
+    /// walked the sequence, not those that rendered frame 0 alone).
     fn sequence(&self) -> &[Checkpoint] {
         if self.frames.len() > 1 { &self.frames[1..] } else { &self.frames }
+    }
+
+    /// The sequence's figure per seed: over the checkpoints, or frame 0's
+    /// first `walked` seeds where there are none.
+    fn sequence_per_seed(&self, f: impl Fn(&Checkpoint, usize) -> f64) -> Vec<f64> {
+        let mut v = self.per_seed(self.sequence(), f);
+        if self.frames.len() == 1 {
+            v.truncate(self.walked);
+        }
+        v
     }
 
     /// The unclamped image mean over the truth's at frame 0, over seeds.
@@ -165,18 +183,31 @@ impl EnergyRun {
 
     /// The mean over the checkpoints of that ratio, over seeds.
     pub fn sequence_ratio(&self) -> Estimate {
-        Estimate::of(&self.per_seed(self.sequence(), |c, s| c.unclamped[s] / c.truth))
+        Estimate::of(&self.sequence_per_seed(|c, s| c.unclamped[s] / c.truth))
     }
 
     /// The share of the indirect light the clamp removes, mean over the
     /// checkpoints, over seeds.
     pub fn clamp_removed(&self) -> Estimate {
-        Estimate::of(&self.per_seed(self.sequence(), |c, s| 1.0 - c.clamped[s] / c.unclamped[s]))
+        Estimate::of(&self.sequence_per_seed(|c, s| 1.0 - c.clamped[s] / c.unclamped[s]))
     }
 
     /// The largest relative standard error of the truth over the frames.
     pub fn truth_rel_se(&self) -> f64 {
         self.frames.iter().map(|c| c.truth_se / c.truth).fold(0.0, f64::max)
+    }
+
+    /// The relative standard error that frame 0's truth gives its ratio.
+    pub fn frame0_truth_rel_se(&self) -> f64 {
+        self.frames.first().map_or(0.0, |c| c.truth_se / c.truth)
+    }
+
+    /// The relative standard error that the truths give the sequence's
+    /// ratio, a mean over its checkpoints of ratios to independent truths:
+    /// √(Σ_k (σ_k / t_k)²) / K.
+    pub fn sequence_truth_rel_se(&self) -> f64 {
+        let frames = self.sequence();
+        (frames.iter().map(|c| (c.truth_se / c.truth).powi(2)).sum::<f64>()).sqrt() / frames.len().max(1) as f64
     }
 }
 
@@ -272,8 +303,10 @@ pub fn measure(
         out.push(Checkpoint { frame: f, truth, truth_se, unclamped: Vec::new(), clamped: Vec::new() });
         progress(&format!("truth of frame {f}"));
     }
-    for k in 0..s.seeds {
+    for k in 0..s.seeds.max(s.frame0_seeds) {
         let seed = s.seed + k as u64;
+        // Seeds past `seeds` render frame 0 alone.
+        let steps = if k < s.seeds { &steps[..] } else { &steps[..1.min(steps.len())] };
         let mut renderer = Renderer::builder(&setup.scene)
             .registry(registry)
             .sampler(s.sampler.as_str())
@@ -285,7 +318,7 @@ pub fn measure(
             .clamp(Clamp::Off)
             .mode(Mode::Indirect)
             .build()?;
-        for &f in &steps {
+        for &f in steps {
             let (scene, camera) = setup.frame(f)?;
             let camera = camera.with_resolution(s.size)?;
             let gbuffer = render_gbuffer(&scene, &camera);
@@ -304,19 +337,20 @@ pub fn measure(
             }
         }
     }
-    Ok(EnergyRun { scene: scene_name.into(), frames: out, seconds: start.elapsed().as_secs_f64() })
+    Ok(EnergyRun { scene: scene_name.into(), frames: out, seconds: start.elapsed().as_secs_f64(), walked: s.seeds as usize })
 }
 
 /// A Markdown table of `runs`: the frame-0 and sequence ratios and the
 /// clamp's removed share, each ± its standard error over seeds.
 pub fn markdown(runs: &[EnergyRun], s: &EnergySettings) -> String {
     let mut md = format!(
-        "{} with I = {}, {}×{}, {} seeds, stepped {}, {} checkpoints; path tracer {} spp through the pixel centres, depth {}; unclamped, ray-traced, exhaustive, indirect only.\n\n",
+        "{} with I = {}, {}×{}, {} seeds ({} at frame 0), stepped {}, {} checkpoints; path tracer {} spp through the pixel centres, depth {}; unclamped, ray-traced, exhaustive, indirect only.\n\n",
         s.sampler,
         s.vpls,
         s.size.0,
         s.size.1,
         s.seeds,
+        s.seeds.max(s.frame0_seeds),
         if s.stride <= 1 {
             "at every frame".to_string()
         } else {

@@ -29,6 +29,10 @@ pub(super) struct Args {
     /// Seeds of the sampler.
     #[arg(long, default_value_t = 3)]
     seeds: u32,
+    /// Seeds rendered at frame 0 (at least --seeds; those past --seeds render frame 0 alone):
+    /// one frame's image mean varies more between seeds than a sequence's.
+    #[arg(long = "frame0-seeds", default_value_t = 16)]
+    frame0_seeds: u32,
     /// First seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -69,6 +73,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         vpls,
         size: Size(w, h),
         seeds,
+        frame0_seeds,
         seed,
         checkpoints,
         stride,
@@ -87,8 +92,20 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         let (k, value) = item.split_once('=').ok_or_else(|| format!("--set {item}: expected KEY=VALUE"))?;
         params.insert(k, value).map_err(|e| format!("--set {e}"))?;
     }
-    let settings =
-        EnergySettings { sampler, params, vpls, size: (w, h), seeds, seed, checkpoints, stride, settle, truth_spp: spp, max_depth };
+    let settings = EnergySettings {
+        sampler,
+        params,
+        vpls,
+        size: (w, h),
+        seeds,
+        frame0_seeds,
+        seed,
+        checkpoints,
+        stride,
+        settle,
+        truth_spp: spp,
+        max_depth,
+    };
     let (setups, skipped) = study_scenes(&scenes, allow_outside)?;
     let pool = pool(threads)?;
     let dir = OutDir::create("--out", &out)?;
@@ -125,6 +142,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         "vpls": vpls,
         "size": [w, h],
         "seeds": seeds,
+        "frame0_seeds": seeds.max(frame0_seeds),
         "seed": seed,
         "stride": stride,
         "settle": settle,

@@ -619,7 +619,10 @@ fn reproduce(args: &[String]) -> Result<(), String> {
         // Every built-in, Table 1's moving sun, and its real scenes (skipped where absent).
         let mut scenes: Vec<String> = SCENES.iter().map(|s| s.to_string()).collect();
         scenes.extend(["courtyard-sun", "sponza", "munich"].map(String::from));
-        eprintln!("xtask: [energy] SMC's image mean against path tracing on {} scenes, 3 seeds", scenes.len());
+        eprintln!(
+            "xtask: [energy] SMC's image mean against path tracing on {} scenes, 3 seeds along the sequences, 16 at frame 0",
+            scenes.len()
+        );
         let dir = results.join("energy");
         let mut c = Command::new(&vpl);
         c.current_dir(root())

@@ -153,7 +153,8 @@ pub const PROFILE_SEEDS: u32 = 3;
 pub const PAPER_TRUTH_SPP: u32 = 692_100;
 
 /// The methods of the table: the paper's four, RR, and SMC with the paper's
-/// kNN flux (`smc-knn`, eq. 5 and 7) beside the default cell flux.
+/// kNN flux (`smc-knn`, eq. 5 and 7) beside the default flux (the cell's
+/// light as the VPL shows it to the camera, `voronoi-near`).
 pub const METHODS: [&str; 6] = ["ir", "rr", "mir-resample", "tcas", "smc", "smc-knn"];
 
 /// Whether `method` is SMC under another flux or setting (`smc-…`, or

@@ -95,7 +95,7 @@ pub fn markdown(r: &Table1Results) -> String {
          shading, the cross-bilateral filter and the clamp G_max = I / A_view of each frame's view; no temporal reprojection; max depth {} (three \
          indirect bounces). |E′| is the mean absolute change of the error from one frame to the next (Δt = one frame at 30 fps). \
          Profile `{}`, {}×{} pixels, {} backend. MIR is the resampling stand-in the paper used (256 path-tracer paths per VPL); SMC is the toolkit's default \
-         (each VPL's flux is its Voronoi cell's light), SMC (kNN flux) the paper's flux (eq. 5 and 7). \
+         (each VPL's flux is its Voronoi cell's light as the VPL shows it to the camera), SMC (kNN flux) the paper's flux (eq. 5 and 7). \
          Every method ran {} times (seeds {}..{}); values are over all runs, frames and tracked pixels, with 95 % confidence \
          intervals in brackets: a two-way percentile bootstrap ({} replicates) that resamples seeds and tracked pixels and keeps \
          each pixel's series of frames whole (frames are correlated and |E′| needs consecutive ones). \

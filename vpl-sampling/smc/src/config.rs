@@ -185,7 +185,7 @@ impl SmcConfig {
         },
         ParamKey {
             key: "flux",
-            default: "voronoi",
+            default: "voronoi-near (voronoi with a placement other than site)",
             about: "area per VPL in its flux: voronoi (cells measured by candidate hits), voronoi-near (the cell's probes, each standing for the area of those near the VPL), voronoi-site (the cell's area times the VPL's own radiance), knn (the paper's eq. 7) or knn-calibrated",
         },
         ParamKey { key: "probe-iterations", default: "16", about: "T: iterations of candidate hits that measure the Voronoi cells" },
@@ -242,6 +242,7 @@ impl SmcConfig {
             return Err(p.out_of_range("strong-quantile", strong_quantile, "in (0, 1]"));
         }
         let knn_k = p.get::<usize>("knn-k")?;
+        let placement = p.get_or("placement", d.placement)?;
         if knn_k == Some(0) {
             return Err(p.out_of_range("knn-k", 0, "at least 1"));
         }
@@ -257,12 +258,12 @@ impl SmcConfig {
             visibility_rays: p.get_or("visibility-rays", d.visibility_rays)?,
             visibility_iterations: p.get_or("visibility-iterations", d.visibility_iterations)?,
             strong_quantile,
-            flux: flux_param(p)?,
+            flux: flux_param(p, placement)?,
             probe_iterations: p.count_or("probe-iterations", d.probe_iterations, 1)?,
             probes_per_vpl: p.count_or("probes-per-vpl", d.probes_per_vpl, 1)?,
             probe_window: p.get_or("probe-window", d.probe_window)?,
             probe_area: p.get_or("probe-area", d.probe_area)?,
-            placement: p.get_or("placement", d.placement)?,
+            placement,
             relight: p.get_or("relight", d.relight)?,
             relight_paths: p.count_or("relight-paths", d.relight_paths, 1)?,
             relight_bounces: match p.get::<u32>("relight-bounces")? {

@@ -32,9 +32,13 @@
 //! set's regularity and the VPLs' place on the bright side of their pieces
 //! of surface make that estimate 15–32 % too bright on real geometry. Each
 //! VPL carries instead the light of its Voronoi cell, measured by the
-//! candidate-ray hits ([`FluxEstimator`], derivation and measurements in
-//! its module); `SmcConfig { flux: FluxEstimator::Knn, .. }` is the
-//! paper's. A VPL shines from its own point, or with
+//! candidate-ray hits, as the VPL shows it to the camera: each of the
+//! cell's probes stands for the area of the probes near the VPL, so that a
+//! VPL on the side of its cell where the camera's rays are dense does not
+//! show all of the cell's light from there ([`FluxEstimator`], derivation
+//! and measurements in its module); `SmcConfig { flux:
+//! FluxEstimator::Knn, .. }` is the paper's. A VPL shines from its own
+//! point, or (with the cell's plain light, [`FluxEstimator::Voronoi`]) with
 //! [`Placement::Centroid`] from the probe of its cell nearest the cell's
 //! centroid (a VPL at the edge of its cell is a quadrature point off
 //! centre, which leaves the Munich blocks 6 % too bright; derivation and
@@ -98,7 +102,10 @@ mod sampler;
 
 pub use ball_area::{ProbeArea, surface_in_ball};
 pub use config::{SmcConfig, SmcError};
-pub use flux::{AreaProbes, Cell, FluxEstimator, ProbeCandidate, ProbeHits, ProbeWindow, Site, Track, surface_neighbour_sq};
+pub use flux::{
+    AreaProbes, Cell, FluxEstimator, NEAR_BLEND, NEAR_MIN, NEAR_SHARE, ProbeCandidate, ProbeHits, ProbeWindow, Site, Track,
+    surface_neighbour_sq,
+};
 pub use placement::{Choice, KEEP_WITHIN, Placement, Shown, choose, settle};
 pub use points::{
     CameraPoint, CandidateHit, camera_points, camera_points_of, camera_sees, candidate_hits, candidate_hits_from, first_passing,

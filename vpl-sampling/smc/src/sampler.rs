@@ -1,7 +1,7 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::flux::{AreaProbes, FluxEstimator, ProbeCandidate, ProbeHits, Site};
+use crate::flux::{AreaProbes, FluxEstimator, NEAR_BLEND, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points_of, camera_sees, candidate_hits_from, mutual_ray, resolve};
 use crate::relight::Relight;
@@ -168,6 +168,8 @@ pub struct SmcSampler {
     probes: AreaProbes,
     /// The point each slot's VPL shone from last ([`Placement::Centroid`]).
     shown: Vec<Option<Shown>>,
+    /// Each slot's VPL and its blended near ratio ([`FluxEstimator::VoronoiNear`]).
+    near: Vec<Option<(u64, f64)>>,
     /// Inside the warm-up: the flux is not looked at, so the cells are not measured.
     warming: bool,
     /// Whether this iteration's hits become area probes (all but the
@@ -239,6 +241,7 @@ impl SmcSampler {
                 .with_window(config.probe_window)
                 .with_ball(config.probe_area),
             shown: vec![None; config.vpls],
+            near: vec![None; config.vpls],
             warming: false,
             collect_probes: true,
             stats: SmcStats::default(),
@@ -283,6 +286,7 @@ impl SmcSampler {
         self.lighting = None;
         self.probes.clear();
         self.shown.iter_mut().for_each(|s| *s = None);
+        self.near.iter_mut().for_each(|s| *s = None);
     }
 
     /// The seed of VPL `id`'s radiosity paths.
@@ -712,6 +716,7 @@ impl SmcSampler {
             flux[s] = p.radiance / (n as f32 * p.density);
         }
         let mut shown: Vec<Option<Shown>> = vec![None; self.config.vpls];
+        let mut near_memory = std::mem::take(&mut self.near);
         if self.config.probes() {
             // Each VPL's radiance under this iteration's lights, beside this iteration's probes.
             let record: Vec<(u32, u64, Vec3)> = slots.iter().map(|&s| (s as u32, particle(s).id, particle(s).radiance)).collect();
@@ -722,7 +727,13 @@ impl SmcSampler {
             let (_, sites) = self.sites();
             st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
             st.candidate_light = self.probes.candidate_light();
-            if let Some(cells) = self.probes.cells(&sites) {
+            let near = self.config.flux == FluxEstimator::VoronoiNear;
+            let measured = if near {
+                self.probes.cells_and_near_ratios(&sites).map(|(cells, ratios)| (cells, Some(ratios)))
+            } else {
+                self.probes.cells(&sites).map(|cells| (cells, None))
+            };
+            if let Some((cells, near_ratios)) = measured {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
@@ -732,8 +743,17 @@ impl SmcSampler {
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiNear => {
-                        let near = self.probes.near_ratios(&sites);
-                        slots.iter().zip(by_cell).zip(near).for_each(|((&s, f), r)| flux[s] = f * r as f32)
+                        let ratios = near_ratios.unwrap_or_else(|| vec![1.0; slots.len()]);
+                        // Each VPL's ratio blended over its frames (NEAR_BLEND).
+                        for ((&s, f), r) in slots.iter().zip(by_cell).zip(ratios) {
+                            let id = particle(s).id;
+                            let r = match near_memory[s] {
+                                Some((was, prev)) if was == id => prev + NEAR_BLEND * (r - prev),
+                                _ => r,
+                            };
+                            near_memory[s] = Some((id, r));
+                            flux[s] = f * r as f32;
+                        }
                     }
                     FluxEstimator::VoronoiSite => {
                         slots.iter().zip(&cells).for_each(|(&s, c)| flux[s] = particle(s).radiance * c.area as f32)
@@ -789,6 +809,7 @@ impl SmcSampler {
             self.set.set(s, v);
         }
         self.shown = shown;
+        self.near = near_memory;
         st.stored = n;
         st.intensity_cv = coefficient_of_variation(self.particles.iter().flatten().map(|p| p.intensity()));
     }
@@ -873,7 +894,7 @@ mod tests {
         let setup = vpl_core::SceneSetup::builtin("cornell").unwrap();
         let camera = setup.camera.with_resolution((32, 32)).unwrap();
         let gbuffer = vpl_core::GBuffer::empty();
-        let config = SmcConfig { vpls: 128, warmup: 8, placement: Placement::Random, ..SmcConfig::default() };
+        let config = SmcConfig { vpls: 128, warmup: 8, placement: Placement::Random, flux: FluxEstimator::Voronoi, ..SmcConfig::default() };
         let run = || {
             let mut smc = SmcSampler::new(config).unwrap();
             let mut frames = Vec::new();

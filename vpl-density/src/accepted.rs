@@ -333,12 +333,7 @@ impl AcceptTree {
             }
             let node = self.nodes[at as usize];
             if node.count == 0 {
-                let (cl, cr) = (node.first, node.first + 1);
-                let dl = box_box_dist_sq(&leaf, &self.nodes[cl as usize]);
-                let dr = box_box_dist_sq(&leaf, &self.nodes[cr as usize]);
-                let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
-                walk.push(far.0, far.1);
-                walk.push(near.0, near.1);
+                self.push_children(&mut walk, &leaf, &node);
                 continue;
             }
             let ns = node.first as usize;
@@ -368,6 +363,18 @@ impl AcceptTree {
                 (i, answer)
             })
             .collect()
+    }
+
+    /// Pushes the children of `node` onto a walk for the points of `leaf`,
+    /// the nearer by box-to-box distance last, so that it is visited first.
+    #[inline]
+    fn push_children(&self, walk: &mut Walk, leaf: &Node, node: &Node) {
+        let (cl, cr) = (node.first, node.first + 1);
+        let dl = box_box_dist_sq(leaf, &self.nodes[cl as usize]);
+        let dr = box_box_dist_sq(leaf, &self.nodes[cr as usize]);
+        let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
+        walk.push(far.0, far.1);
+        walk.push(near.0, near.1);
     }
 
     /// The nearest other point of every point of the set, by index in the
@@ -429,12 +436,7 @@ impl AcceptTree {
             }
             let node = self.nodes[at as usize];
             if node.count == 0 {
-                let (cl, cr) = (node.first, node.first + 1);
-                let dl = box_box_dist_sq(&leaf, &self.nodes[cl as usize]);
-                let dr = box_box_dist_sq(&leaf, &self.nodes[cr as usize]);
-                let (near, far) = if dl <= dr { ((cl, dl), (cr, dr)) } else { ((cr, dr), (cl, dl)) };
-                walk.push(far.0, far.1);
-                walk.push(near.0, near.1);
+                self.push_children(&mut walk, &leaf, &node);
                 continue;
             }
             if at as usize != l {

@@ -1176,14 +1176,9 @@ impl AreaProbes {
         self.cells_and(sites, false).map(|(cells, _)| cells)
     }
 
-    /// [`AreaProbes::cells`] and [`AreaProbes::near_ratios`] from one pass
-    /// over the probes.
-    pub fn cells_and_near_ratios(&self, sites: &[Site]) -> Option<(Vec<Cell>, Vec<f64>)> {
-        self.cells_and(sites, true).map(|(cells, near)| (cells, near.unwrap_or_default()))
-    }
-
-    /// The cells, and with `near` each site's near ratio.
-    fn cells_and(&self, sites: &[Site], near: bool) -> Option<(Vec<Cell>, Option<Vec<f64>>)> {
+    /// [`AreaProbes::cells`], and with `near` each site's near ratio
+    /// ([`AreaProbes::near_ratios`]), from one pass over the probes.
+    pub(crate) fn cells_and(&self, sites: &[Site], near: bool) -> Option<(Vec<Cell>, Option<Vec<f64>>)> {
         if self.batches.is_empty() {
             return None;
         }

@@ -727,13 +727,7 @@ impl SmcSampler {
             let (_, sites) = self.sites();
             st.probe_rays = self.probes.assign(scene, self.rays.as_ref(), &sites);
             st.candidate_light = self.probes.candidate_light();
-            let near = self.config.flux == FluxEstimator::VoronoiNear;
-            let measured = if near {
-                self.probes.cells_and_near_ratios(&sites).map(|(cells, ratios)| (cells, Some(ratios)))
-            } else {
-                self.probes.cells(&sites).map(|cells| (cells, None))
-            };
-            if let Some((cells, near_ratios)) = measured {
+            if let Some((cells, near_ratios)) = self.probes.cells_and(&sites, self.config.flux == FluxEstimator::VoronoiNear) {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };

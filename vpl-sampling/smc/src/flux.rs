@@ -332,8 +332,12 @@ enum Owner {
 }
 
 /// One probe: a point of the surfaces (geometric normal toward the ray
-/// that found it), the area it stands for (m²), the radiance estimated
-/// there when the hit became a candidate, and its cell.
+/// that found it), the area it stands for (m²), where its candidate's
+/// radiance is kept if the hit became one, and its cell.
+///
+/// What only candidates carry lies in a table beside the batch
+/// ([`Carried`]): the walks over all probes (owners, cells) then read 64
+/// bytes a probe instead of 104.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Probe {
     p: Vec3,
@@ -341,14 +345,29 @@ struct Probe {
     /// Shading normal, on the side of `n` (where a VPL shines from here).
     ns: Vec3,
     area: f32,
-    radiance: Option<Vec3>,
+    /// Index of its candidate's [`Carried`] in its batch's table
+    /// ([`NOT_CARRIED`]: not a candidate).
+    carried: u32,
+    owner: Owner,
+}
+
+// The size the text of `Probe` states.
+const _: () = assert!(std::mem::size_of::<Probe>() == 64);
+
+/// [`Probe::carried`] of a probe that carries no radiance.
+const NOT_CARRIED: u32 = u32::MAX;
+
+/// What a probe whose hit became a candidate carries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Carried {
+    /// The radiance estimated there.
+    radiance: Vec3,
     /// The radiance's weight in its cell's mean: the area of its hit over
     /// the hit's share of the resampling draws (see [`AreaProbes::push`]).
     weight: f32,
     /// A candidate's relighting estimates (D(t), D(now))
     /// ([`crate::Relight::Candidates`]).
     track: Option<(Vec3, Vec3)>,
-    owner: Owner,
 }
 
 impl Probe {
@@ -356,7 +375,13 @@ impl Probe {
     /// a candidate's radiance.
     #[inline]
     fn counts(&self) -> bool {
-        self.area > 0.0 || self.radiance.is_some()
+        self.area > 0.0 || self.carried != NOT_CARRIED
+    }
+
+    /// Its candidate's radiance, weight and relighting estimates, if any.
+    #[inline]
+    fn carried<'a>(&self, table: &'a [Carried]) -> Option<&'a Carried> {
+        table.get(self.carried as usize)
     }
 
     /// Whether the probe lies on `site`'s own smooth surface (normals
@@ -398,11 +423,11 @@ pub struct ProbeCandidate {
 /// keyed by the id ([`AreaProbes::relight`]).
 pub type Track<'a> = dyn FnMut(&[(SurfacePoint, u64)]) -> Vec<Vec3> + 'a;
 
-/// A candidate held for relighting: its probe in its batch, its id (which
-/// keys its estimates' random numbers) and its point.
+/// A candidate held for relighting: its [`Carried`] in its batch's table,
+/// its id (which keys its estimates' random numbers) and its point.
 #[derive(Clone, Copy, Debug)]
 struct Tracked {
-    probe: u32,
+    carried: u32,
     id: u64,
     y: SurfacePoint,
 }
@@ -607,6 +632,8 @@ pub struct AreaProbes {
     records: VecDeque<Option<Record>>,
     /// Per iteration held, its candidates that are relit ([`AreaProbes::relight`]).
     tracked: VecDeque<Vec<Tracked>>,
+    /// Per iteration held, what its candidates' probes carry ([`Probe::carried`]).
+    carried: VecDeque<Vec<Carried>>,
 }
 
 /// The luminance of each slot's VPL (with its id) under one iteration's lights.
@@ -653,6 +680,7 @@ impl AreaProbes {
             ball: ProbeArea::default(),
             records: VecDeque::new(),
             tracked: VecDeque::new(),
+            carried: VecDeque::new(),
         }
     }
 
@@ -696,6 +724,7 @@ impl AreaProbes {
         self.known.clear();
         self.records.clear();
         self.tracked.clear();
+        self.carried.clear();
     }
 
     /// Iterations held.
@@ -768,6 +797,8 @@ impl AreaProbes {
         }
         let own_area = std::f32::consts::PI * (n - 1) as f32 / n as f32;
         let scale = own_area * (n as f32 / area_probes as f32);
+        let mut carried: Vec<Carried> = Vec::new();
+        let mut tracked: Vec<Tracked> = Vec::new();
         let batch: Vec<Probe> = kept
             .iter()
             .enumerate()
@@ -778,14 +809,23 @@ impl AreaProbes {
                 let radiance = radiance[h].filter(|_| placed);
                 // The hit's own area over its share of the draws.
                 let weight = drawn[h] * own_area * r1_sq[t];
+                let at = match radiance {
+                    Some(radiance) => {
+                        let track = tracks[h].map(|(_, d)| (d, d));
+                        if let (Some((y, _)), Some(id)) = (tracks[h], ids[h]) {
+                            tracked.push(Tracked { carried: carried.len() as u32, id, y });
+                        }
+                        carried.push(Carried { radiance, weight: if weight.is_finite() { weight } else { 0.0 }, track });
+                        carried.len() as u32 - 1
+                    }
+                    None => NOT_CARRIED,
+                };
                 Probe {
                     p: hits[h],
                     n: normals[h],
                     ns: if shading[h].is_finite() { shading[h] } else { normals[h] },
                     area: if stands { area } else { 0.0 },
-                    radiance,
-                    weight: if radiance.is_some() && weight.is_finite() { weight } else { 0.0 },
-                    track: tracks[h].filter(|_| radiance.is_some()).map(|(_, d)| (d, d)),
+                    carried: at,
                     owner: if stands || radiance.is_some() { Owner::Unassigned } else { Owner::Nobody },
                 }
             })
@@ -801,23 +841,16 @@ impl AreaProbes {
                 Err(_) => return,
             }
         };
-        let tracked: Vec<Tracked> = kept
-            .iter()
-            .enumerate()
-            .filter_map(|(t, &h)| {
-                let (y, _) = tracks[h]?;
-                batch[t].track?;
-                Some(Tracked { probe: t as u32, id: ids[h]?, y })
-            })
-            .collect();
         if self.batches.len() == self.depth {
             self.batches.pop_front();
             self.draw_scales.pop_front();
             self.trees.pop_front();
             self.records.pop_front();
             self.tracked.pop_front();
+            self.carried.pop_front();
         }
         self.tracked.push_back(tracked);
+        self.carried.push_back(carried);
         self.batches.push_back(batch);
         self.records.push_back(None);
         self.draw_scales.push_back(draw_scale);
@@ -833,13 +866,11 @@ impl AreaProbes {
         if self.batches.is_empty() {
             return 0.0;
         }
-        self.batches
+        self.carried
             .iter()
             .zip(&self.draw_scales)
             .zip(self.weights())
-            .map(|((b, &k), w)| {
-                w * k * b.iter().filter_map(|q| q.radiance.map(|l| q.weight as f64 * vpl_core::image::luminance(l) as f64)).sum::<f64>()
-            })
+            .map(|((c, &k), w)| w * k * c.iter().map(|c| c.weight as f64 * vpl_core::image::luminance(c.radiance) as f64).sum::<f64>())
             .sum()
     }
 
@@ -860,10 +891,10 @@ impl AreaProbes {
             return 0;
         }
         let mut now = now.into_iter();
-        for (batch, tracked) in self.batches.iter_mut().zip(&self.tracked).take(older) {
+        for (carried, tracked) in self.carried.iter_mut().zip(&self.tracked).take(older) {
             for k in tracked {
                 let d_now = now.next().unwrap_or(Vec3::NAN);
-                if let Some(Some((d_then, d))) = batch.get_mut(k.probe as usize).map(|q| q.track.as_mut()) {
+                if let Some(Some((d_then, d))) = carried.get_mut(k.carried as usize).map(|c| c.track.as_mut()) {
                     *d = if d_now.is_finite() { d_now } else { *d_then };
                 }
             }
@@ -1197,9 +1228,10 @@ impl AreaProbes {
         let per_batch: Vec<(Vec<CellSums>, Vec<NearProbe>)> = self
             .batches
             .par_iter()
+            .zip(&self.carried)
             .zip(&weights)
             .zip(&self.records)
-            .map(|((batch, &w), rec)| {
+            .map(|(((batch, carried), &w), rec)| {
                 let mut cells = vec![(Cell::default(), DVec3::ZERO, 0.0); sites.len()];
                 let mut nears = Vec::new();
                 let wf = w as f32;
@@ -1216,18 +1248,18 @@ impl AreaProbes {
                         *m += q.p.as_dvec3() * a;
                         *own += a;
                     }
-                    if let Some(l) = q.radiance {
+                    if let Some(&Carried { radiance: l, weight, track }) = q.carried(carried) {
                         c.radiance_sum += l;
                         c.candidates += 1;
-                        c.weighted_radiance += l * (wf * q.weight);
-                        c.radiance_weight += wf * q.weight;
+                        c.weighted_radiance += l * (wf * weight);
+                        c.radiance_weight += wf * weight;
                         if let Some(y) = then[i] {
-                            c.history_luminance += wf * q.weight * y;
-                            c.history_weight += wf * q.weight;
+                            c.history_luminance += wf * weight * y;
+                            c.history_weight += wf * weight;
                         }
-                        if let Some((d_then, d_now)) = q.track {
-                            c.track_then += wf * q.weight * d_then;
-                            c.track_now += wf * q.weight * d_now;
+                        if let Some((d_then, d_now)) = track {
+                            c.track_then += wf * weight * d_then;
+                            c.track_now += wf * weight * d_now;
                         }
                     }
                 }
@@ -1399,25 +1431,26 @@ fn near_ratios_of(cells: usize, per_batch: &[Vec<NearProbe>]) -> Vec<f64> {
         grouped[at[e.0 as usize]] = e;
         at[e.0 as usize] += 1;
     }
-    let mut groups: Vec<&mut [NearProbe]> = Vec::with_capacity(cells);
-    let mut rest = grouped.as_mut_slice();
-    for i in 0..cells {
-        let (cell, after) = rest.split_at_mut(start[i + 1] - start[i]);
-        groups.push(cell);
-        rest = after;
-    }
-    groups
+    (0..cells)
         .into_par_iter()
-        .map(|cell| {
-            let sums = |c: &[NearProbe]| c.iter().fold((0.0, 0.0), |(w, a), e| (w + e.2, a + e.3));
-            let (w, a) = sums(cell);
+        .map(|i| {
+            let cell = &grouped[start[i]..start[i + 1]];
+            let (w, a) = cell.iter().fold((0.0, 0.0), |(w, a), e| (w + e.2, a + e.3));
             if cell.is_empty() || w <= 0.0 || a <= 0.0 {
                 return 1.0;
             }
             let m = ((cell.len() as f64 * NEAR_SHARE).ceil() as usize).max(NEAR_MIN).min(cell.len());
-            // A stable sort: the earlier probe first among equal distances.
-            cell.sort_by(|x, y| x.1.total_cmp(&y.1));
-            let (near_w, near_a) = sums(&cell[..m]);
+            // The m nearest, the earlier probe first among equal distances
+            // (the order the grouping kept), summed nearest first: chosen
+            // in linear time, and only they are sorted.
+            let mut order: Vec<(f32, u32)> = cell.iter().enumerate().map(|(j, e)| (e.1, j as u32)).collect();
+            let by_distance = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+            if m < order.len() {
+                order.select_nth_unstable_by(m, by_distance);
+            }
+            let near = &mut order[..m];
+            near.sort_unstable_by(by_distance);
+            let (near_w, near_a) = near.iter().fold((0.0, 0.0), |(w, a), &(_, j)| (w + cell[j as usize].2, a + cell[j as usize].3));
             let ratio = (near_a / near_w) / (a / w);
             if ratio.is_finite() && ratio > 0.0 { ratio } else { 1.0 }
         })
@@ -2042,7 +2075,7 @@ mod tests {
         let mut a = AreaProbes::new(2).with_per_iteration(10);
         for offset in [0, 1] {
             push(&mut a, &hits, &up, &[(1, Vec3::ONE), (2, Vec3::ONE), (4, Vec3::ONE)]);
-            let batch = a.batches.back().unwrap();
+            let (batch, carried) = (a.batches.back().unwrap(), a.carried.back().unwrap());
             let kept: Vec<usize> = (offset..40).step_by(4).collect();
             let candidates_besides = [1, 2, 4].iter().filter(|&&h| h % 4 != offset).count();
             assert_eq!(batch.len(), kept.len() + candidates_besides, "offset {offset}");
@@ -2051,9 +2084,9 @@ mod tests {
                 assert!((q.area - 4.0 * own * all[h]).abs() <= 1e-6 * q.area, "hit {h}: {} against 4 × {}", q.area, own * all[h]);
             }
             for q in &batch[kept.len()..] {
-                assert!(q.area == 0.0 && q.radiance == Some(Vec3::ONE) && q.owner == Owner::Unassigned);
+                assert!(q.area == 0.0 && q.carried(carried).map(|c| c.radiance) == Some(Vec3::ONE) && q.owner == Owner::Unassigned);
             }
-            assert_eq!(batch.iter().filter(|q| q.radiance.is_some()).count(), 3);
+            assert_eq!(batch.iter().filter(|q| q.carried(carried).is_some()).count(), 3);
         }
     }
 

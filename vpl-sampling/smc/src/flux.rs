@@ -988,13 +988,20 @@ impl AreaProbes {
         // few that fail the first try, so that speculating costs few rays).
         let probes: Vec<&Probe> = todo.iter().map(|&(b, k)| &self.batches[b][k]).collect();
         let points: Vec<Vec3> = probes.iter().map(|q| q.p).collect();
-        let first: Vec<(usize, Vec<usize>)> = tree
+        let first: Vec<(usize, usize)> = tree
             .nearest_accepted_each(&points, |t, i| same_surface(probes[t], i))
             .into_iter()
             .enumerate()
-            .filter_map(|(t, found)| found.map(|(i, _)| (t, vec![i])))
+            .filter_map(|(t, found)| found.map(|(i, _)| (t, i)))
             .collect();
-        cast += self.own_first_seen(scene, rays, sites, todo, &first, &mut owner);
+        // One try each: one batch of rays, and no list per probe.
+        let (seen, rays_cast) = self.see(scene, rays, sites, first.iter().map(|&(t, i)| (todo[t], i)));
+        cast += rays_cast;
+        for (&(t, i), seen) in first.iter().zip(seen) {
+            if seen {
+                owner[t] = Some(i);
+            }
+        }
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
         let batches = &self.batches;
         let more: Vec<(usize, Vec<usize>)> = open
@@ -1225,7 +1232,7 @@ impl AreaProbes {
         };
         let newest = self.records.back().and_then(|r| r.as_ref());
         let now: Vec<Option<f32>> = (0..sites.len()).map(|i| recorded(newest, i)).collect();
-        let per_batch: Vec<(Vec<CellSums>, Vec<NearProbe>)> = self
+        let per_batch: Vec<(Vec<CellSums>, NearBatch)> = self
             .batches
             .par_iter()
             .zip(&self.carried)
@@ -1239,7 +1246,7 @@ impl AreaProbes {
                 for q in batch {
                     let Some(i) = live.get(q.owner) else { continue };
                     if near && q.area > 0.0 && w > 0.0 {
-                        nears.push((i as u32, (q.p - sites[i].p).length_squared(), w, w * q.area as f64));
+                        nears.push((i as u32, (q.p - sites[i].p).length_squared(), q.area));
                     }
                     let (c, m, own) = &mut cells[i];
                     let a = w * q.area as f64;
@@ -1263,11 +1270,11 @@ impl AreaProbes {
                         }
                     }
                 }
-                (cells, nears)
+                (cells, NearBatch::by_cell(sites.len(), &nears))
             })
             .collect();
         let (per_batch, nears): (Vec<_>, Vec<_>) = per_batch.into_iter().unzip();
-        let near = near.then(|| near_ratios_of(sites.len(), &nears));
+        let near = near.then(|| near_ratios_of(sites.len(), &nears, &weights));
         let mut cells = vec![(Cell::default(), DVec3::ZERO, 0.0); sites.len()];
         for batch in per_batch {
             for ((c, m, own), (b, bm, bown)) in cells.iter_mut().zip(batch) {
@@ -1411,31 +1418,57 @@ impl AreaProbes {
 type CellSums = (Cell, DVec3, f64);
 
 /// An area probe of a cell for [`AreaProbes::near_ratios`]: (cell,
-/// squared distance to its VPL, weight, weighted area).
-type NearProbe = (u32, f32, f64, f64);
+/// squared distance to its VPL, area).
+type NearProbe = (u32, f32, f32);
 
-/// The near ratio of each of `cells` cells from its area probes, listed per
-/// batch in batch order ([`AreaProbes::near_ratios`]).
-fn near_ratios_of(cells: usize, per_batch: &[Vec<NearProbe>]) -> Vec<f64> {
-    // Grouped by cell, in batch order within each.
-    let mut start = vec![0usize; cells + 1];
-    for &(i, ..) in per_batch.iter().flatten() {
-        start[i as usize + 1] += 1;
+/// One batch's area probes for [`AreaProbes::near_ratios`], grouped by
+/// cell in the batch's order: cell `i`'s (squared distance, area) are
+/// `probes[start[i]..start[i + 1]]`. Each batch groups its own, in
+/// parallel with the others.
+struct NearBatch {
+    start: Vec<u32>,
+    probes: Vec<(f32, f32)>,
+}
+
+impl NearBatch {
+    /// `nears` (of `cells` cells) grouped by cell, by counting.
+    fn by_cell(cells: usize, nears: &[NearProbe]) -> NearBatch {
+        let mut start = vec![0u32; cells + 1];
+        for &(i, ..) in nears {
+            start[i as usize + 1] += 1;
+        }
+        for i in 0..cells {
+            start[i + 1] += start[i];
+        }
+        let mut at = start.clone();
+        let mut probes = vec![(0.0f32, 0.0f32); nears.len()];
+        for &(i, d, a) in nears {
+            probes[at[i as usize] as usize] = (d, a);
+            at[i as usize] += 1;
+        }
+        NearBatch { start, probes }
     }
-    for i in 0..cells {
-        start[i + 1] += start[i];
+
+    /// Cell `i`'s probes (none when the batch holds no near probes).
+    fn cell(&self, i: usize) -> &[(f32, f32)] {
+        match (self.start.get(i), self.start.get(i + 1)) {
+            (Some(&s), Some(&e)) => &self.probes[s as usize..e as usize],
+            _ => &[],
+        }
     }
-    let mut at = start.clone();
-    let mut grouped = vec![(0u32, 0.0f32, 0.0f64, 0.0f64); start[cells]];
-    for &e in per_batch.iter().flatten() {
-        grouped[at[e.0 as usize]] = e;
-        at[e.0 as usize] += 1;
-    }
+}
+
+/// The near ratio of each of `cells` cells from its area probes, grouped
+/// per batch in batch order, each batch weighted by `weights`
+/// ([`AreaProbes::near_ratios`]).
+fn near_ratios_of(cells: usize, per_batch: &[NearBatch], weights: &[f64]) -> Vec<f64> {
     (0..cells)
         .into_par_iter()
         .map(|i| {
-            let cell = &grouped[start[i]..start[i + 1]];
-            let (w, a) = cell.iter().fold((0.0, 0.0), |(w, a), e| (w + e.2, a + e.3));
+            // (squared distance, weight, weighted area) in batch order.
+            let cell: Vec<(f32, f64, f64)> =
+                per_batch.iter().zip(weights).flat_map(|(b, &w)| b.cell(i).iter().map(move |&(d, a)| (d, w, w * a as f64))).collect();
+            let (w, a) = cell.iter().fold((0.0, 0.0), |(w, a), e| (w + e.1, a + e.2));
             if cell.is_empty() || w <= 0.0 || a <= 0.0 {
                 return 1.0;
             }
@@ -1443,14 +1476,14 @@ fn near_ratios_of(cells: usize, per_batch: &[Vec<NearProbe>]) -> Vec<f64> {
             // The m nearest, the earlier probe first among equal distances
             // (the order the grouping kept), summed nearest first: chosen
             // in linear time, and only they are sorted.
-            let mut order: Vec<(f32, u32)> = cell.iter().enumerate().map(|(j, e)| (e.1, j as u32)).collect();
+            let mut order: Vec<(f32, u32)> = cell.iter().enumerate().map(|(j, e)| (e.0, j as u32)).collect();
             let by_distance = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
             if m < order.len() {
                 order.select_nth_unstable_by(m, by_distance);
             }
             let near = &mut order[..m];
             near.sort_unstable_by(by_distance);
-            let (near_w, near_a) = near.iter().fold((0.0, 0.0), |(w, a), &(_, j)| (w + cell[j as usize].2, a + cell[j as usize].3));
+            let (near_w, near_a) = near.iter().fold((0.0, 0.0), |(w, a), &(_, j)| (w + cell[j as usize].1, a + cell[j as usize].2));
             let ratio = (near_a / near_w) / (a / w);
             if ratio.is_finite() && ratio > 0.0 { ratio } else { 1.0 }
         })

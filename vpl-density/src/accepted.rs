@@ -162,6 +162,19 @@ fn box_box_dist_sq(a: &Node, b: &Node) -> f32 {
     d
 }
 
+/// How far a walk of [`AcceptTree::search`] reaches.
+enum Reach<'a> {
+    /// It gives up (returns false) on seeing its k-th point, which few
+    /// queries do.
+    Count(usize),
+    /// The heap keeps the bits of the k smallest distances seen (distances
+    /// are never negative, so their bits order like them), and a node
+    /// beyond the k-th of them is skipped: all its points rank k or later.
+    Kth(usize, &'a mut BinaryHeap<u32>),
+    /// Only the points within this squared distance (ties included).
+    Within(f32),
+}
+
 /// A distance with its point's index, ordered by distance and then index.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Ranked(f32, u32);
@@ -263,20 +276,70 @@ impl AcceptTree {
         m: usize,
         k: usize,
     ) -> Vec<(usize, f32)> {
+        self.nearest_accepted_reach(q, skip, accept, m, k).0
+    }
+
+    /// [`AcceptTree::nearest_accepted`], and the reach of the k-th nearest
+    /// point ([`AcceptTree::reach_sq`]) when the walk had to find it.
+    pub(crate) fn nearest_accepted_reach(
+        &self,
+        q: &[f32; 3],
+        skip: Option<usize>,
+        accept: impl Fn(usize) -> bool,
+        m: usize,
+        k: usize,
+    ) -> (Vec<(usize, f32)>, Option<f32>) {
         if m == 0 || k == 0 || self.len == 0 {
-            return Vec::new();
+            return (Vec::new(), None);
         }
+        let mut reach = None;
         let mut best: Vec<Ranked> = Vec::with_capacity(m);
-        if !self.search(q, skip, &accept, (m, k), &mut best, None) {
+        if !self.search(q, skip, &accept, m, &mut best, Reach::Count(k)) {
             // The walk reached k points: again, keeping the k smallest
             // distances, and only the accepted points among them.
             best.clear();
             let mut kth = BinaryHeap::with_capacity(k.min(self.len));
-            self.search(q, skip, &accept, (m, k), &mut best, Some(&mut kth));
+            self.search(q, skip, &accept, m, &mut best, Reach::Kth(k, &mut kth));
             if let (true, Some(&t)) = (kth.len() == k, kth.peek()) {
                 best.retain(|r| r.0.to_bits() <= t);
             }
+            reach = Some(if kth.len() == k { kth.peek().map_or(f32::INFINITY, |&t| f32::from_bits(t)) } else { f32::INFINITY });
         }
+        (best.into_iter().map(|r| (r.1 as usize, r.0)).collect(), reach)
+    }
+
+    /// The squared distance of the `k`-th nearest point of the set to `q`
+    /// (infinite when the set has fewer than `k` points): the reach of
+    /// [`AcceptTree::nearest_accepted`] with this `k`, whose answer
+    /// [`AcceptTree::nearest_accepted_within`] then finds in one walk.
+    pub(crate) fn reach_sq(&self, q: &[f32; 3], k: usize) -> f32 {
+        if k == 0 || k > self.len {
+            return f32::INFINITY;
+        }
+        let mut kth = BinaryHeap::with_capacity(k);
+        self.search(q, None, &|_| false, 1, &mut Vec::new(), Reach::Kth(k, &mut kth));
+        kth.peek().map_or(f32::INFINITY, |&t| f32::from_bits(t))
+    }
+
+    /// Up to `m` points that `accept` takes, other than `skip`, nearest
+    /// first (ties to the lower index), within squared distance `r2` of
+    /// `q` (ties included). With `r2` from [`AcceptTree::reach_sq`] (k), it
+    /// is [`AcceptTree::nearest_accepted`]'s answer (m, k): every point of
+    /// the k nearest lies within it, and every point within it but the
+    /// ties of the k-th is among them.
+    pub(crate) fn nearest_accepted_within(
+        &self,
+        q: &[f32; 3],
+        skip: Option<usize>,
+        accept: impl Fn(usize) -> bool,
+        m: usize,
+        r2: f32,
+    ) -> Vec<(usize, f32)> {
+        if m == 0 || self.len == 0 || r2.is_nan() {
+            return Vec::new();
+        }
+        let mut best: Vec<Ranked> = Vec::with_capacity(m);
+        self.search(q, skip, &accept, m, &mut best, Reach::Within(r2));
         best.into_iter().map(|r| (r.1 as usize, r.0)).collect()
     }
 
@@ -475,34 +538,35 @@ impl AcceptTree {
         out
     }
 
-    /// The walk, depth first, nearer child first. Without `kth` it gives up
-    /// (returns false) on reaching the k-th point, which few queries do;
-    /// with it, `kth` keeps the bits of the k smallest distances seen
-    /// (distances are never negative, so their bits order like them), and
-    /// a node beyond the k-th of them is skipped: all its points rank k or
-    /// later. A node beyond the m-th best accepted point is skipped too.
-    /// In both cases every point nearer than an accepted one in `best` has
-    /// been seen.
-    /// `(m, k)`: the accepted points wanted, and the nearest points they
-    /// are taken from.
+    /// The walk, depth first, nearer child first, for the `m` nearest
+    /// accepted points, as far as `reach` says ([`Reach`]). A node beyond
+    /// the m-th best accepted point is skipped too. Every point nearer than
+    /// an accepted one in `best` (and within the reach) has been seen.
+    /// Returns false when a [`Reach::Count`] walk gave up.
     fn search(
         &self,
         q: &[f32; 3],
         skip: Option<usize>,
         accept: &impl Fn(usize) -> bool,
-        (m, k): (usize, usize),
+        m: usize,
         best: &mut Vec<Ranked>,
-        mut kth: Option<&mut BinaryHeap<u32>>,
+        reach: Reach,
     ) -> bool {
+        // `k`: the points a counting walk may see (none: it does not count).
+        let (k, mut kth, r2) = match reach {
+            Reach::Count(k) => (Some(k), None, f32::INFINITY),
+            Reach::Kth(k, heap) => (Some(k), Some(heap), f32::INFINITY),
+            Reach::Within(r2) => (None, None, r2),
+        };
         let mut seen = 0usize;
         let root = &self.nodes[0];
         let mut walk = Walk::new(0, box_dist_sq(q, &root.lo, &root.hi));
         while let Some((at, b)) = walk.pop() {
-            if best.len() == m && best[m - 1].0 < b {
+            if (best.len() == m && best[m - 1].0 < b) || b > r2 {
                 continue;
             }
             if let Some(h) = kth.as_deref()
-                && h.len() == k
+                && Some(h.len()) == k
                 && h.peek().is_some_and(|&t| f32::from_bits(t) < b)
             {
                 continue;
@@ -520,15 +584,17 @@ impl AcceptTree {
             let s = node.first as usize;
             let d = self.leaves.dist_sq(s, q);
             for (&d, &j) in d.iter().zip(&self.leaves.index[s..s + node.count as usize]) {
-                match kth.as_deref_mut() {
-                    None => {
+                match (kth.as_deref_mut(), k) {
+                    (None, Some(k)) => {
                         seen += 1;
                         if seen == k {
                             return false;
                         }
                     }
-                    Some(h) if h.len() < k => h.push(d.to_bits()),
-                    Some(h) => {
+                    (None, None) if d > r2 => continue,
+                    (None, None) => {}
+                    (Some(h), Some(k)) if h.len() < k => h.push(d.to_bits()),
+                    (Some(h), _) => {
                         if let Some(mut t) = h.peek_mut()
                             && d.to_bits() < *t
                         {
@@ -627,6 +693,32 @@ mod tests {
                     assert_eq!(
                         tree.nearest_accepted(q, skip, accept, m, k),
                         brute(&pts, q, skip, accept, m, k),
+                        "n {n} query {t} m {m} k {k} modulus {modulus}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Within the reach of the k-th nearest point, one walk answers as
+    /// the counting walk and its second walk do, whatever the predicate
+    /// (from none of the points to all, some rare), m and k (ties at the
+    /// reach included: the coarse grid holds many).
+    #[test]
+    fn within_the_reach_answers_as_the_k_nearest_do() {
+        let grid: Vec<[f32; 3]> = points(2000, 31).into_iter().map(|p| p.map(|x| (x * 6.0).floor())).collect();
+        for (n, pts) in [(1, points(1, 32)), (9, points(9, 33)), (300, points(300, 34)), (2048, points(2048, 35)), (2000, grid)] {
+            let tree = AcceptTree::new(&pts);
+            let queries: Vec<[f32; 3]> = points(100, 36).into_iter().chain(pts.iter().take(100).copied()).collect();
+            for (t, q) in queries.iter().enumerate() {
+                let modulus = [1usize, 2, 7, 61, 997, usize::MAX][t % 6];
+                let accept = |j: usize| j % modulus.max(1) == 0 || modulus == usize::MAX && j == n - 1;
+                for (m, k) in [(1, 512), (4, 512), (3, 5), (1, 1), (8, n)] {
+                    let k = k.min(n);
+                    let skip = (t % 3 == 0).then_some(t % n);
+                    assert_eq!(
+                        tree.nearest_accepted_within(q, skip, accept, m, tree.reach_sq(q, k)),
+                        tree.nearest_accepted(q, skip, accept, m, k),
                         "n {n} query {t} m {m} k {k} modulus {modulus}"
                     );
                 }

@@ -145,6 +145,55 @@ impl KnnDensity {
         self.accepted().nearest_accepted(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
     }
 
+    /// [`KnnDensity::nearest_accepted_n`], and how far it looks from `q`
+    /// ([`KnnDensity::accept_reach_sq`]) when the search had to find that
+    /// (a predicate that few of the 512 nearest points pass).
+    pub fn nearest_accepted_n_reach(
+        &self,
+        q: Vec3,
+        skip: Option<usize>,
+        accept: impl Fn(usize) -> bool,
+        m: usize,
+    ) -> (Vec<(usize, f32)>, Option<f32>) {
+        if m == 0 || self.points.is_empty() {
+            return (Vec::new(), None);
+        }
+        self.accepted().nearest_accepted_reach(&q.to_array(), skip, accept, m, ACCEPT_AMONG.min(self.points.len()))
+    }
+
+    /// How far [`KnnDensity::nearest_accepted_n`] looks from `q`: the
+    /// squared distance of its 512th nearest point of the set (infinite
+    /// for an empty set; the farthest point's for a set of at most 512).
+    /// A query asked again with other predicates finds it once and hands
+    /// it to [`KnnDensity::nearest_accepted_n_within`].
+    pub fn accept_reach_sq(&self, q: Vec3) -> f32 {
+        if self.points.is_empty() {
+            return f32::INFINITY;
+        }
+        self.accepted().reach_sq(&q.to_array(), ACCEPT_AMONG.min(self.points.len()))
+    }
+
+    /// [`KnnDensity::nearest_accepted_n`]'s answer, given its reach
+    /// `reach_sq` from [`KnnDensity::accept_reach_sq`] (`q`) or from an
+    /// earlier [`KnnDensity::nearest_accepted_n_reach`] at `q`: one walk
+    /// within that distance instead of one that may reach the 512th
+    /// point, give up and walk again (what a predicate that few points
+    /// near `q` pass costs). Ties at the reach count as within it, as they
+    /// do there.
+    pub fn nearest_accepted_n_within(
+        &self,
+        q: Vec3,
+        skip: Option<usize>,
+        accept: impl Fn(usize) -> bool,
+        m: usize,
+        reach_sq: f32,
+    ) -> Vec<(usize, f32)> {
+        if m == 0 || self.points.is_empty() {
+            return Vec::new();
+        }
+        self.accepted().nearest_accepted_within(&q.to_array(), skip, accept, m, reach_sq)
+    }
+
     /// For each of `queries` (finite), the nearest point of the set that
     /// `accept(query, point)` takes, as [`KnnDensity::nearest_accepted`]
     /// answers it with no point skipped, for all the queries at once: the

@@ -1017,9 +1017,11 @@ impl AreaProbes {
         self.write_owners(live, todo, &owner);
         // The probes still without an owner try the VPLs whose cells hold
         // the probes next to them, round by round, so that a cell reaches
-        // across a band of any width.
+        // across a band of any width. How far each looks among its
+        // iteration's probes is found once for all the rounds.
+        let mut reach: Vec<Option<f32>> = vec![None; todo.len()];
         for _ in 0..NEIGHBOUR_ROUNDS {
-            let (joined, rays_cast) = self.own_through_neighbours(scene, rays, live, todo, &mut owner);
+            let (joined, rays_cast) = self.own_through_neighbours(scene, rays, live, todo, &mut reach, &mut owner);
             cast += rays_cast;
             if joined == 0 {
                 break;
@@ -1040,7 +1042,7 @@ impl AreaProbes {
                 let q = &batches[todo[t].0][todo[t].1];
                 // The cell of its nearest owned neighbour on its surface
                 // keeps its light where the surface is.
-                let neighbour = self.neighbour_owners(live, todo[t], 1).first().copied();
+                let neighbour = self.neighbour_owners(live, todo[t], 1, reach[t]).0.first().copied();
                 neighbour.or_else(|| {
                     let same_side = tree.nearest_accepted(q.p, None, |i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
                     same_side.or_else(|| tree.nearest_accepted(q.p, None, |_| true)).map(|(i, _)| i)
@@ -1056,19 +1058,23 @@ impl AreaProbes {
 
     /// The owners of the `m` nearest owned probes of probe `(b, k)`'s
     /// iteration on its own smooth surface, each VPL once, nearest first,
-    /// only VPLs on the probe's side of the surface.
-    fn neighbour_owners(&self, live: &Live, (b, k): (usize, usize), m: usize) -> Vec<usize> {
+    /// only VPLs on the probe's side of the surface, among its iteration's
+    /// 512 nearest probes (`reach_sq`: [`KnnDensity::accept_reach_sq`]).
+    fn neighbour_owners(&self, live: &Live, (b, k): (usize, usize), m: usize, reach_sq: Option<f32>) -> (Vec<usize>, Option<f32>) {
         let (batch, q) = (&self.batches[b], &self.batches[b][k]);
         let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| live.sites[i].n.dot(q.n) > SAME_SIDE_COS);
-        let near =
-            self.trees[b].nearest_accepted_n(q.p, Some(k), |j| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some(), m);
+        let accept = |j: usize| batch[j].on_surface_of_probe(q) && owned_here(&batch[j]).is_some();
+        let (near, reach_sq) = match reach_sq {
+            Some(r2) => (self.trees[b].nearest_accepted_n_within(q.p, Some(k), accept, m, r2), Some(r2)),
+            None => self.trees[b].nearest_accepted_n_reach(q.p, Some(k), accept, m),
+        };
         let mut owners: Vec<usize> = Vec::with_capacity(near.len());
         for i in near.into_iter().filter_map(|(j, _)| owned_here(&batch[j])) {
             if !owners.contains(&i) {
                 owners.push(i);
             }
         }
-        owners
+        (owners, reach_sq)
     }
 
     /// Records the owners found for `todo` (none: no cell).
@@ -1095,11 +1101,18 @@ impl AreaProbes {
         rays: &dyn RayCaster,
         live: &Live,
         todo: &[(usize, usize)],
+        reach: &mut [Option<f32>],
         owner: &mut [Option<usize>],
     ) -> (usize, usize) {
         let sites = live.sites;
         let open: Vec<usize> = (0..todo.len()).filter(|&t| owner[t].is_none()).collect();
-        let offers: Vec<(usize, Vec<usize>)> = open.par_iter().map(|&t| (t, self.neighbour_owners(live, todo[t], OWNER_TRIES))).collect();
+        let found: Vec<(Vec<usize>, Option<f32>)> =
+            open.par_iter().map(|&t| self.neighbour_owners(live, todo[t], OWNER_TRIES, reach[t])).collect();
+        let mut offers: Vec<(usize, Vec<usize>)> = Vec::with_capacity(open.len());
+        for (&t, (list, r)) in open.iter().zip(found) {
+            reach[t] = r;
+            offers.push((t, list));
+        }
         let cast = self.own_first_seen(scene, rays, sites, todo, &offers, owner);
         (open.iter().filter(|&&t| owner[t].is_some()).count(), cast)
     }

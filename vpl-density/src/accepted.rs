@@ -300,10 +300,12 @@ impl AcceptTree {
             best.clear();
             let mut kth = BinaryHeap::with_capacity(k.min(self.len));
             self.search(q, skip, &accept, m, &mut best, Reach::Kth(k, &mut kth));
-            if let (true, Some(&t)) = (kth.len() == k, kth.peek()) {
+            // The k-th distance's bits (none: the set has fewer points).
+            let t = kth.peek().copied().filter(|_| kth.len() == k);
+            if let Some(t) = t {
                 best.retain(|r| r.0.to_bits() <= t);
             }
-            reach = Some(if kth.len() == k { kth.peek().map_or(f32::INFINITY, |&t| f32::from_bits(t)) } else { f32::INFINITY });
+            reach = Some(t.map_or(f32::INFINITY, f32::from_bits));
         }
         (best.into_iter().map(|r| (r.1 as usize, r.0)).collect(), reach)
     }

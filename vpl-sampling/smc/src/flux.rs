@@ -1059,7 +1059,8 @@ impl AreaProbes {
     /// The owners of the `m` nearest owned probes of probe `(b, k)`'s
     /// iteration on its own smooth surface, each VPL once, nearest first,
     /// only VPLs on the probe's side of the surface, among its iteration's
-    /// 512 nearest probes (`reach_sq`: [`KnnDensity::accept_reach_sq`]).
+    /// 512 nearest probes (`reach_sq`: how far that is, if an earlier
+    /// [`KnnDensity::nearest_accepted_n_reach`] found it; handed back).
     fn neighbour_owners(&self, live: &Live, (b, k): (usize, usize), m: usize, reach_sq: Option<f32>) -> (Vec<usize>, Option<f32>) {
         let (batch, q) = (&self.batches[b], &self.batches[b][k]);
         let owned_here = |o: &Probe| live.get(o.owner).filter(|&i| live.sites[i].n.dot(q.n) > SAME_SIDE_COS);
@@ -1245,7 +1246,7 @@ impl AreaProbes {
         };
         let newest = self.records.back().and_then(|r| r.as_ref());
         let now: Vec<Option<f32>> = (0..sites.len()).map(|i| recorded(newest, i)).collect();
-        let per_batch: Vec<(Vec<CellSums>, NearBatch)> = self
+        let per_batch: Vec<(Vec<CellSums>, Option<NearBatch>)> = self
             .batches
             .par_iter()
             .zip(&self.carried)
@@ -1283,11 +1284,11 @@ impl AreaProbes {
                         }
                     }
                 }
-                (cells, NearBatch::by_cell(sites.len(), &nears))
+                (cells, near.then(|| NearBatch::by_cell(sites.len(), &nears)))
             })
             .collect();
         let (per_batch, nears): (Vec<_>, Vec<_>) = per_batch.into_iter().unzip();
-        let near = near.then(|| near_ratios_of(sites.len(), &nears, &weights));
+        let near = near.then(|| near_ratios_of(sites.len(), &nears.into_iter().flatten().collect::<Vec<_>>(), &weights));
         let mut cells = vec![(Cell::default(), DVec3::ZERO, 0.0); sites.len()];
         for batch in per_batch {
             for ((c, m, own), (b, bm, bown)) in cells.iter_mut().zip(batch) {

@@ -519,15 +519,18 @@ impl Cell {
 
     /// [`Cell::mean_radiance`] brought to the lights of now by the change
     /// of its candidates' relighting estimates, (Σ w D(now) − Σ w D(t)) / Σ w
-    /// (eq. 1 of [`crate::Relight`]'s module), held at zero or above; the
-    /// mean itself where no candidate has a weight.
+    /// (eq. 1 of [`crate::Relight`]'s module); the mean itself where no
+    /// candidate has a weight. Signed: where the cell's light fell, the
+    /// noisy change can overshoot below zero, and the sampler takes that
+    /// part from the neighbouring cells' light
+    /// ([`crate::relight::spread_deficits`]) rather than adding it.
     pub fn relit_radiance(&self, fallback: Vec3) -> Vec3 {
         let mean = self.mean_radiance(fallback);
         if self.radiance_weight <= 0.0 {
             return mean;
         }
         let l = mean + (self.track_now - self.track_then) / self.radiance_weight;
-        if l.is_finite() { l.max(Vec3::ZERO) } else { mean }
+        if l.is_finite() { l } else { mean }
     }
 
     /// The cell's mean radiance under the lights of now as `relight` brings
@@ -1667,7 +1670,7 @@ mod tests {
 
     /// Relighting estimates D(now) anew for the candidates of the older
     /// iterations (the newest's stay at D(t)), and a cell's mean moves by
-    /// its candidates' weighted change, held at zero or above.
+    /// its candidates' weighted change, below zero where it overshoots.
     #[test]
     fn relighting_moves_each_cell_by_the_change_of_its_candidates_estimates() {
         let scene = floor(false);
@@ -1720,8 +1723,9 @@ mod tests {
         let c = cells[0];
         assert!((c.mean_radiance(Vec3::ZERO) - Vec3::splat(16.0 / 3.0)).abs().max_element() < 1e-5);
         assert!((c.relit_radiance(Vec3::ZERO) - Vec3::splat(6.0)).abs().max_element() < 1e-5, "{}", c.relit_radiance(Vec3::ZERO));
-        // The second cell's mean would fall below zero: it is held at zero.
-        assert_eq!(cells[1].relit_radiance(Vec3::ZERO), Vec3::ZERO);
+        // The second cell's mean falls below zero, 8 − 20 = −12: it stays
+        // signed ([`crate::relight::spread_deficits`] takes it from its neighbours).
+        assert!((cells[1].relit_radiance(Vec3::ZERO) - Vec3::splat(-12.0)).abs().max_element() < 1e-5);
         // An estimator that answers short changes nothing.
         assert_eq!(a.relight(&mut |_| Vec::new()), 0);
         assert_eq!(a.cells(&s).unwrap(), cells);

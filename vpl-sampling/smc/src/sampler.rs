@@ -1,10 +1,10 @@
 //! Algorithm 1 of Hedman et al. (2017), one iteration per frame.
 
 use crate::config::{SmcConfig, SmcError};
-use crate::flux::{AreaProbes, FluxEstimator, NEAR_BLEND, ProbeCandidate, ProbeHits, Site};
+use crate::flux::{AreaProbes, Cell, FluxEstimator, NEAR_BLEND, ProbeCandidate, ProbeHits, Site};
 use crate::placement::{self, Placement, Shown};
 use crate::points::{CameraPoint, CandidateHit, camera_points_of, camera_sees, candidate_hits_from, mutual_ray, resolve};
-use crate::relight::Relight;
+use crate::relight::{self, Relight};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -118,6 +118,10 @@ pub struct SmcStats {
     pub candidate_light: f64,
     /// Candidates brought to the lights of now ([`Relight::Candidates`]).
     pub relit_candidates: usize,
+    /// The light (luminance of flux) of the relit cells' negative parts
+    /// that their neighbours had too little light to take, so it was
+    /// dropped ([`crate::relight::spread_deficits`]): light added.
+    pub unplaced_light: f64,
 }
 
 impl SmcStats {
@@ -682,14 +686,33 @@ impl SmcSampler {
     pub fn cell_pieces(&self) -> Vec<Vpl> {
         let (slots, sites) = self.sites();
         let Some(cells) = self.probes.cells(&sites) else { return Vec::new() };
+        let (flux, _) = self.cell_fluxes(&slots, &sites, &cells);
         let radiance: Vec<Vec3> =
-            slots.iter().zip(&cells).filter_map(|(&s, c)| self.particles[s].map(|p| c.radiance(self.config.relight, p.radiance))).collect();
+            flux.iter().zip(&cells).map(|(&f, c)| if c.area > 0.0 { f / c.area as f32 } else { Vec3::ZERO }).collect();
         self.probes
             .pieces(&sites, &radiance)
             .into_iter()
             .enumerate()
             .map(|(k, (_, y, n, flux))| Vpl { y, n, flux, id: k as u64, bounce: 0 })
             .collect()
+    }
+
+    /// Each cell's light Φ_i = L̄_now(V_i) · A(V_i) (the mean radiance as
+    /// [`Relight`] brings it to the lights of now, the cell's VPL's own
+    /// radiance where no candidate fell in it), `slots`, `sites` and
+    /// `cells` in the same order; the negative parts of relit cells taken
+    /// from their neighbours' light ([`relight::spread_deficits`]), and the
+    /// luminance of those parts the neighbours could not take.
+    fn cell_fluxes(&self, slots: &[usize], sites: &[Site], cells: &[Cell]) -> (Vec<Vec3>, f64) {
+        let mut flux: Vec<Vec3> = slots
+            .iter()
+            .zip(cells)
+            .map(|(&s, c)| self.particles[s].map_or(Vec3::ZERO, |p| c.radiance(self.config.relight, p.radiance) * c.area as f32))
+            .collect();
+        let points: Vec<Vec3> = sites.iter().map(|s| s.p).collect();
+        let normals: Vec<Vec3> = sites.iter().map(|s| s.n).collect();
+        let unplaced = relight::spread_deficits(&points, &normals, &mut flux);
+        (flux, unplaced)
     }
 
     /// The probes of the last frame's cells: point, shading normal and the
@@ -731,9 +754,9 @@ impl SmcSampler {
                 let knn_total: f64 = slots.iter().map(|&s| 1.0 / (n as f64 * particle(s).density as f64)).filter(|a| a.is_finite()).sum();
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
-                // Each cell's mean radiance under the lights of now ([`Relight`]).
-                let by_cell: Vec<Vec3> =
-                    slots.iter().zip(&cells).map(|(&s, c)| c.radiance(self.config.relight, particle(s).radiance) * c.area as f32).collect();
+                // Each cell's light under the lights of now ([`Relight`]), non-negative (eq. 2 of its module).
+                let (by_cell, unplaced) = self.cell_fluxes(&slots, &sites, &cells);
+                st.unplaced_light = unplaced;
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiNear => {

@@ -111,6 +111,6 @@ pub use points::{
     CameraPoint, CandidateHit, camera_points, camera_points_of, camera_sees, candidate_hits, candidate_hits_from, first_passing,
     mutual_ray, mutually_visible, resolve,
 };
-pub use relight::{DEFICIT_NEIGHBOURS, Relight, spread_deficits};
+pub use relight::{DEFICIT_NEIGHBOURS, Relight, Spread, spread_deficits};
 pub use sampler::{Estimator, Particle, SmcSampler, SmcStats, SmcTimings};
 pub use vpl_core::resample::{Resampled, resample, resample_counted};

@@ -118,10 +118,10 @@ pub struct SmcStats {
     pub candidate_light: f64,
     /// Candidates brought to the lights of now ([`Relight::Candidates`]).
     pub relit_candidates: usize,
-    /// The light (luminance of flux) of the relit cells' negative parts
-    /// that their neighbours had too little light to take, so it was
-    /// dropped ([`crate::relight::spread_deficits`]): light added.
-    pub unplaced_light: f64,
+    /// The relit cells whose light fell below zero, and what became of it
+    /// ([`relight::spread_deficits`]): taken from their neighbours, but
+    /// for [`relight::Spread::unplaced`].
+    pub negative_cells: relight::Spread,
 }
 
 impl SmcStats {
@@ -702,8 +702,8 @@ impl SmcSampler {
     /// radiance where no candidate fell in it), `slots`, `sites` and
     /// `cells` in the same order; the negative parts of relit cells taken
     /// from their neighbours' light ([`relight::spread_deficits`]), and the
-    /// luminance of those parts the neighbours could not take.
-    fn cell_fluxes(&self, slots: &[usize], sites: &[Site], cells: &[Cell]) -> (Vec<Vec3>, f64) {
+    /// what was spread.
+    fn cell_fluxes(&self, slots: &[usize], sites: &[Site], cells: &[Cell]) -> (Vec<Vec3>, relight::Spread) {
         let mut flux: Vec<Vec3> = slots
             .iter()
             .zip(cells)
@@ -711,8 +711,8 @@ impl SmcSampler {
             .collect();
         let points: Vec<Vec3> = sites.iter().map(|s| s.p).collect();
         let normals: Vec<Vec3> = sites.iter().map(|s| s.n).collect();
-        let unplaced = relight::spread_deficits(&points, &normals, &mut flux);
-        (flux, unplaced)
+        let spread = relight::spread_deficits(&points, &normals, &mut flux);
+        (flux, spread)
     }
 
     /// The probes of the last frame's cells: point, shading normal and the
@@ -755,8 +755,8 @@ impl SmcSampler {
                 let cell_total: f64 = cells.iter().map(|c| c.area).sum();
                 st.knn_area_ratio = if cell_total > 0.0 { (knn_total / cell_total) as f32 } else { 0.0 };
                 // Each cell's light under the lights of now ([`Relight`]), non-negative (eq. 2 of its module).
-                let (by_cell, unplaced) = self.cell_fluxes(&slots, &sites, &cells);
-                st.unplaced_light = unplaced;
+                let (by_cell, spread) = self.cell_fluxes(&slots, &sites, &cells);
+                st.negative_cells = spread;
                 match self.config.flux {
                     FluxEstimator::Voronoi => slots.iter().zip(by_cell).for_each(|(&s, f)| flux[s] = f),
                     FluxEstimator::VoronoiNear => {

@@ -700,9 +700,9 @@ impl SmcSampler {
     /// Each cell's light Φ_i = L̄_now(V_i) · A(V_i) (the mean radiance as
     /// [`Relight`] brings it to the lights of now, the cell's VPL's own
     /// radiance where no candidate fell in it), `slots`, `sites` and
-    /// `cells` in the same order; the negative parts of relit cells taken
-    /// from their neighbours' light ([`relight::spread_deficits`]), and the
-    /// what was spread.
+    /// `cells` in the same order, with the negative parts of relit cells
+    /// taken from their neighbours' light ([`relight::spread_deficits`]);
+    /// and what was spread.
     fn cell_fluxes(&self, slots: &[usize], sites: &[Site], cells: &[Cell]) -> (Vec<Vec3>, relight::Spread) {
         let mut flux: Vec<Vec3> = slots
             .iter()

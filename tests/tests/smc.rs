@@ -490,3 +490,38 @@ fn a_lamp_leaving_a_room_takes_its_overshoot_from_the_neighbours() {
     assert!(negative > 0, "no relit cell came out below zero along the lamp's walk");
     assert!(unplaced <= 0.01 * light, "the neighbours took {:.1} % of the negative light", 100.0 * (1.0 - unplaced / light));
 }
+
+/// The candidates' relighting estimates (eq. 1 of `vpl_smc::Relight`'s
+/// module) are made only at iterations whose lights changed: none while
+/// they stand still (a frame of `building` held for 20 iterations), and at
+/// the first change both D(t), under the lights the held candidates were
+/// made under, and D(now) for the candidates of every iteration held but
+/// the newest (about 2 · 15 iterations' candidates). While the lamp keeps
+/// moving, D(t) is left to make for one iteration's candidates only, so
+/// the next frame makes about half as many (16 iterations' against 30).
+#[test]
+fn relighting_estimates_are_made_only_when_the_lights_move() {
+    use vpl_core::{Frame, VplSampler};
+    let setup = vpl_scene_io::load("building").unwrap();
+    let mut s = smc(512, SmcConfig::default().warmup);
+    let mut step = |f: u32| {
+        let (scene, camera) = setup.frame(f).unwrap();
+        let camera = camera.with_resolution((32, 24)).unwrap();
+        let gbuffer = render_gbuffer(&scene, &camera);
+        s.next_frame(&Frame { scene: &scene, camera: &camera, time: 0.0, index: f as u64, seed: 5, gbuffer: &gbuffer, previous: None });
+        let st = s.stats();
+        (st.relit_candidates, st.candidates)
+    };
+    let mut held = Vec::new();
+    for _ in 0..20 {
+        held.push(step(330));
+    }
+    assert!(held.iter().all(|&(r, _)| r == 0), "estimates made under lights that stand still: {held:?}");
+    let per_iteration = held.iter().skip(4).map(|&(_, c)| c).sum::<usize>() as f64 / 16.0;
+    let (first, _) = step(331);
+    let (next, _) = step(332);
+    eprintln!("relighting estimates: {first} at the first change, {next} at the next ({per_iteration:.0} candidates an iteration)");
+    let within = |made: usize, iterations: f64| (made as f64 - iterations * per_iteration).abs() <= 0.05 * iterations * per_iteration;
+    assert!(within(first, 30.0), "{first} estimates at the first change, not about 30 iterations' candidates");
+    assert!(within(next, 16.0), "{next} estimates at the next change, not about 16 iterations' candidates");
+}

@@ -366,7 +366,8 @@ struct Carried {
     /// the hit's share of the resampling draws (see [`AreaProbes::push`]).
     weight: f32,
     /// A candidate's relighting estimates (D(t), D(now))
-    /// ([`crate::Relight::Candidates`]).
+    /// ([`crate::Relight::Candidates`]; `None` until D(t) is made, and
+    /// where an estimate was not finite).
     track: Option<(Vec3, Vec3)>,
 }
 
@@ -413,10 +414,11 @@ pub struct ProbeCandidate {
     pub draws: f32,
     /// Its id.
     pub id: u64,
-    /// Its point, and its short relighting estimate D(t) under this
-    /// iteration's lights ([`crate::Relight::Candidates`]; `None`: the
-    /// candidate is not relit).
-    pub track: Option<(SurfacePoint, Vec3)>,
+    /// Its point, where the candidate is relit ([`crate::Relight::Candidates`];
+    /// `None`: it is not). Its short relighting estimate D(t) under this
+    /// iteration's lights is made only when the lights change
+    /// ([`AreaProbes::relight`]): under lights that stand still it is never needed.
+    pub track: Option<SurfacePoint>,
 }
 
 /// Estimates a radiance for each (point, id) pair, with random numbers
@@ -430,6 +432,9 @@ struct Tracked {
     carried: u32,
     id: u64,
     y: SurfacePoint,
+    /// Whether D(t) is still to be estimated, under the lights of the
+    /// candidate's iteration.
+    pending: bool,
 }
 
 /// One iteration's candidate-ray hits for [`AreaProbes::push`].
@@ -769,7 +774,7 @@ impl AreaProbes {
                 radiance[c.hit] = c.radiance.is_finite().then_some(c.radiance);
                 drawn[c.hit] = if c.draws.is_finite() && c.draws > 0.0 { c.draws } else { 0.0 };
                 ids[c.hit] = Some(c.id);
-                tracks[c.hit] = c.track.filter(|(_, d)| d.is_finite());
+                tracks[c.hit] = c.track;
             }
         }
         let stride = n.div_ceil(self.per_iteration).max(1);
@@ -814,11 +819,10 @@ impl AreaProbes {
                 let weight = drawn[h] * own_area * r1_sq[t];
                 let at = match radiance {
                     Some(radiance) => {
-                        let track = tracks[h].map(|(_, d)| (d, d));
-                        if let (Some((y, _)), Some(id)) = (tracks[h], ids[h]) {
-                            tracked.push(Tracked { carried: carried.len() as u32, id, y });
+                        if let (Some(y), Some(id)) = (tracks[h], ids[h]) {
+                            tracked.push(Tracked { carried: carried.len() as u32, id, y, pending: true });
                         }
-                        carried.push(Carried { radiance, weight: if weight.is_finite() { weight } else { 0.0 }, track });
+                        carried.push(Carried { radiance, weight: if weight.is_finite() { weight } else { 0.0 }, track: None });
                         carried.len() as u32 - 1
                     }
                     None => NOT_CARRIED,
@@ -877,32 +881,61 @@ impl AreaProbes {
             .sum()
     }
 
-    /// Estimates anew the relighting estimate D(now) of every candidate
-    /// held but those of the newest iteration ([`crate::Relight::Candidates`]):
-    /// `track` estimates each (point, id) with the random numbers its id
-    /// keys. Each cell's mean radiance then moves by its candidates'
-    /// (Σ w D(now) − Σ w D(t)) / Σ w ([`Cell::relit_radiance`]).
-    /// Returns the estimates made.
-    pub fn relight(&mut self, track: &mut Track) -> usize {
+    /// Brings the candidates held to new lights ([`crate::Relight::Candidates`]),
+    /// every iteration's but the newest's (estimated under these lights).
+    /// `then` estimates D(t) of each (point, id) under the lights the
+    /// candidates not yet relit were made under, the lights of the last
+    /// change before this one (made only now: under lights that stand
+    /// still no estimate is needed); `now` estimates D(now) under the new
+    /// lights. Both take the random numbers each id keys, so D(t) is the
+    /// estimate its own iteration would have made. Each cell's mean
+    /// radiance then moves by its candidates' (Σ w D(now) − Σ w D(t)) / Σ w
+    /// ([`Cell::relit_radiance`]). Returns the estimates made; an estimator
+    /// that answers short changes nothing.
+    pub fn relight(&mut self, then: &mut Track, now: &mut Track) -> usize {
         let older = self.tracked.len().saturating_sub(1);
-        let jobs: Vec<(SurfacePoint, u64)> = self.tracked.iter().take(older).flatten().map(|k| (k.y, k.id)).collect();
-        if jobs.is_empty() {
-            return 0;
-        }
-        let now = track(&jobs);
-        if now.len() != jobs.len() {
-            return 0;
-        }
-        let mut now = now.into_iter();
-        for (carried, tracked) in self.carried.iter_mut().zip(&self.tracked).take(older) {
-            for k in tracked {
-                let d_now = now.next().unwrap_or(Vec3::NAN);
-                if let Some(Some((d_then, d))) = carried.get_mut(k.carried as usize).map(|c| c.track.as_mut()) {
-                    *d = if d_now.is_finite() { d_now } else { *d_then };
+        let pending: Vec<(SurfacePoint, u64)> =
+            self.tracked.iter().take(older).flatten().filter(|k| k.pending).map(|k| (k.y, k.id)).collect();
+        let mut made = 0;
+        if !pending.is_empty() {
+            let d_then = then(&pending);
+            if d_then.len() != pending.len() {
+                return 0;
+            }
+            made += d_then.len();
+            let mut d_then = d_then.into_iter();
+            for (carried, tracked) in self.carried.iter_mut().zip(self.tracked.iter_mut()).take(older) {
+                for k in tracked.iter_mut().filter(|k| k.pending) {
+                    let d = d_then.next().unwrap_or(Vec3::NAN);
+                    k.pending = false;
+                    if let Some(c) = carried.get_mut(k.carried as usize) {
+                        c.track = d.is_finite().then_some((d, d));
+                    }
                 }
             }
         }
-        jobs.len()
+        let mut jobs: Vec<(SurfacePoint, u64)> = Vec::new();
+        for (carried, tracked) in self.carried.iter().zip(&self.tracked).take(older) {
+            let relit = tracked.iter().filter(|k| carried.get(k.carried as usize).is_some_and(|c| c.track.is_some()));
+            jobs.extend(relit.map(|k| (k.y, k.id)));
+        }
+        if jobs.is_empty() {
+            return made;
+        }
+        let d_now = now(&jobs);
+        if d_now.len() != jobs.len() {
+            return made;
+        }
+        let mut d_now = d_now.into_iter();
+        for b in 0..older {
+            for k in &self.tracked[b] {
+                if let Some((d_then, d)) = self.carried[b].get_mut(k.carried as usize).and_then(|c| c.track.as_mut()) {
+                    let n = d_now.next().unwrap_or(Vec3::NAN);
+                    *d = if n.is_finite() { n } else { *d_then };
+                }
+            }
+        }
+        made + jobs.len()
     }
 
     /// Records the radiance of each VPL of the set, `(slot, id, L)`, under
@@ -1678,13 +1711,8 @@ mod tests {
         let point = |p: Vec3| SurfacePoint { p, ng: Vec3::Y, n: Vec3::Y, triangle: 0, material: 0 };
         let mut a = AreaProbes::new(2);
         let hits = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(0.2, 0.0, 0.1), Vec3::new(0.9, 0.0, 0.9)];
-        let tracked = |hit: usize, l: f32, d: f32, id: u64| ProbeCandidate {
-            hit,
-            radiance: Vec3::splat(l),
-            draws: 1.0,
-            id,
-            track: Some((point(hits[hit]), Vec3::splat(d))),
-        };
+        let tracked =
+            |hit: usize, l: f32, id: u64| ProbeCandidate { hit, radiance: Vec3::splat(l), draws: 1.0, id, track: Some(point(hits[hit])) };
         let push = |a: &mut AreaProbes, candidates: &[ProbeCandidate]| {
             let tree = KnnDensity::new(&hits).unwrap();
             let nearest = tree.member_nearest();
@@ -1702,20 +1730,29 @@ mod tests {
         };
         // The older iteration: candidates 1 (L 2, D 1) and 2 (L 4, D 3) in
         // the first cell, 3 (L 8, D 6) in the second; the newer: candidate
-        // 4 (L 10, D 5) in the first.
-        push(&mut a, &[tracked(0, 2.0, 1.0, 1), tracked(1, 4.0, 3.0, 2), tracked(2, 8.0, 6.0, 3)]);
-        push(&mut a, &[tracked(0, 10.0, 5.0, 4)]);
+        // 4 (L 10) in the first.
+        push(&mut a, &[tracked(0, 2.0, 1), tracked(1, 4.0, 2), tracked(2, 8.0, 3)]);
+        push(&mut a, &[tracked(0, 10.0, 4)]);
         a.assign(&scene, &CpuRays, &s);
         let before = a.cells(&s).unwrap();
         assert_eq!(before[0].relit_radiance(Vec3::ZERO), before[0].mean_radiance(Vec3::ZERO));
-        // D now: candidate 1 gains 3, candidate 2 loses 1, candidate 3 loses 20.
-        let mut asked = Vec::new();
-        let made = a.relight(&mut |jobs| {
-            asked.extend(jobs.iter().map(|&(y, id)| (y.p, id)));
-            jobs.iter().map(|&(_, id)| Vec3::splat([4.0, 2.0, -14.0][id as usize - 1])).collect()
-        });
-        assert_eq!(made, 3);
-        assert_eq!(asked, vec![(hits[0], 1), (hits[1], 2), (hits[2], 3)]);
+        // D then as above, D now: candidate 1 gains 3, candidate 2 loses 1,
+        // candidate 3 loses 20. The newest iteration's candidate is asked
+        // for neither (its change is zero).
+        let (mut asked_then, mut asked_now) = (Vec::new(), Vec::new());
+        let made = a.relight(
+            &mut |jobs| {
+                asked_then.extend(jobs.iter().map(|&(y, id)| (y.p, id)));
+                jobs.iter().map(|&(_, id)| Vec3::splat([1.0, 3.0, 6.0][id as usize - 1])).collect()
+            },
+            &mut |jobs| {
+                asked_now.extend(jobs.iter().map(|&(y, id)| (y.p, id)));
+                jobs.iter().map(|&(_, id)| Vec3::splat([4.0, 2.0, -14.0][id as usize - 1])).collect()
+            },
+        );
+        assert_eq!(made, 6);
+        assert_eq!(asked_then, vec![(hits[0], 1), (hits[1], 2), (hits[2], 3)]);
+        assert_eq!(asked_now, asked_then);
         let cells = a.cells(&s).unwrap();
         // The first cell's three candidates weigh alike (hits 0.1 from their
         // nearest, iterations of equal weight): its mean (2 + 4 + 10) / 3
@@ -1726,8 +1763,19 @@ mod tests {
         // The second cell's mean falls below zero, 8 − 20 = −12: it stays
         // signed ([`crate::relight::spread_deficits`] takes it from its neighbours).
         assert!((cells[1].relit_radiance(Vec3::ZERO) - Vec3::splat(-12.0)).abs().max_element() < 1e-5);
+        // D(t) is made once: the next change asks only for D(now).
+        let mut asked_again = 0;
+        let made = a.relight(
+            &mut |jobs| {
+                asked_again += jobs.len();
+                jobs.iter().map(|_| Vec3::ZERO).collect()
+            },
+            &mut |jobs| jobs.iter().map(|&(_, id)| Vec3::splat([4.0, 2.0, -14.0][id as usize - 1])).collect(),
+        );
+        assert_eq!((made, asked_again), (3, 0));
+        assert_eq!(a.cells(&s).unwrap(), cells);
         // An estimator that answers short changes nothing.
-        assert_eq!(a.relight(&mut |_| Vec::new()), 0);
+        assert_eq!(a.relight(&mut |_| Vec::new(), &mut |_| Vec::new()), 0);
         assert_eq!(a.cells(&s).unwrap(), cells);
     }
 

@@ -44,10 +44,14 @@
 //! halve that at three times the cost), and `building` 10 % bright at a
 //! doorway the lamp had just passed. The cells' fluxes stay signed
 //! instead, and each negative part is taken from the light of the
-//! nearest cells ([`spread_deficits`], eq. 2), which adds none. D_h is
-//! estimated for each candidate when it is made (I estimates of one path
-//! an iteration) and for every candidate held (T · I) at the iterations
-//! whose lights changed.
+//! nearest cells ([`spread_deficits`], eq. 2), which adds none. Both
+//! estimates of a candidate are made only at an iteration whose lights
+//! changed: D_h(now) for every candidate held (T · I), and D_h(t_h) for
+//! those not relit before, under the lights they were made under (the
+//! sampler keeps the scene of the last change), with the same random
+//! numbers, so it is the value its own iteration would have made. Where
+//! the lights stand still no estimate is made; where they move every
+//! frame, one iteration's D_h(t_h) (I) is made a frame late.
 //!
 //! Along the sequences (`vpl energy`, 48×36, 3 seeds, the sampler stepped
 //! every 8th frame and at each of the 32 before 3 checkpoints; image mean

@@ -116,7 +116,9 @@ pub struct SmcStats {
     /// The light the candidates of the cells carry, by luminance
     /// ([`AreaProbes::candidate_light`]; 0 without probes).
     pub candidate_light: f64,
-    /// Candidates brought to the lights of now ([`Relight::Candidates`]).
+    /// Relighting estimates made ([`Relight::Candidates`]): D(t) of the
+    /// candidates not relit before and D(now) of all held, at iterations
+    /// whose lights changed; none where they stand still.
     pub relit_candidates: usize,
     /// The relit cells whose light fell below zero, and what became of it
     /// ([`relight::spread_deficits`]): taken from their neighbours, but
@@ -169,6 +171,9 @@ pub struct SmcSampler {
     next_id: u64,
     iterations: u64,
     lighting: Option<LightingKey>,
+    /// The scene as it was when `lighting` was set: the lights the
+    /// candidates made since then were estimated under.
+    lit: Option<Scene>,
     probes: AreaProbes,
     /// The point each slot's VPL shone from last ([`Placement::Centroid`]).
     shown: Vec<Option<Shown>>,
@@ -240,6 +245,7 @@ impl SmcSampler {
             next_id: 0,
             iterations: 0,
             lighting: None,
+            lit: None,
             probes: AreaProbes::new(config.probe_iterations)
                 .with_per_iteration(config.probes_per_iteration())
                 .with_window(config.probe_window)
@@ -288,6 +294,7 @@ impl SmcSampler {
         self.particles.iter_mut().for_each(|p| *p = None);
         self.iterations = 0;
         self.lighting = None;
+        self.lit = None;
         self.probes.clear();
         self.shown.iter_mut().for_each(|s| *s = None);
         self.near.iter_mut().for_each(|s| *s = None);
@@ -487,31 +494,23 @@ impl SmcSampler {
 
         // The hits become area probes, the candidates among them with their radiance.
         if c.probes() && self.collect_probes {
-            // Each candidate's relighting estimate under this iteration's lights.
-            let t0 = Instant::now();
-            let tracks: Vec<Option<(SurfacePoint, Vec3)>> = if c.relight == Relight::Candidates {
-                let jobs: Vec<(SurfacePoint, u64)> =
-                    chosen.iter().enumerate().map(|(i, &h)| (hits[h].y, Self::relight_seed(seed, first_id + i as u64))).collect();
-                let d = self.tracker.radiosity_many(scene, &jobs);
-                jobs.iter().zip(d).map(|(&(y, _), d)| Some((y, d))).collect()
-            } else {
-                vec![None; chosen.len()]
-            };
-            tm.radiosity_ms += ms(t0);
+            // Each candidate's point, where it is relit: its relighting
+            // estimate under this iteration's lights is made if they change.
+            let relit = c.relight == Relight::Candidates;
             let t0 = Instant::now();
             // Each candidate's first landings over its draw probability: with
             // its hit's area, its weight in its cell's mean radiance.
             let sampled: Vec<ProbeCandidate> = chosen
                 .iter()
                 .zip(drawn.first.iter().zip(&drawn.probability))
-                .zip(radiances.iter().zip(tracks))
+                .zip(&radiances)
                 .enumerate()
-                .map(|(i, ((&h, (&c, &p)), (&l, track)))| ProbeCandidate {
+                .map(|(i, ((&h, (&c, &p)), &l))| ProbeCandidate {
                     hit: h,
                     radiance: l,
                     draws: (c as f64 / p) as f32,
                     id: first_id + i as u64,
-                    track,
+                    track: relit.then_some(hits[h].y),
                 })
                 .collect();
             let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
@@ -635,13 +634,17 @@ impl SmcSampler {
                 }
             }
             self.lighting = Some(key);
-            // The candidates held, estimated under earlier lights, brought to these.
-            if st.relit && self.config.relight == Relight::Candidates && self.config.probes() {
+            // The candidates held, estimated under earlier lights, brought to
+            // these: those not relit yet were made under the lights of the
+            // last change, which `lit` holds.
+            let lit = self.lit.replace(scene.clone());
+            if let (true, Some(lit)) = (st.relit && self.config.relight == Relight::Candidates && self.config.probes(), lit) {
                 let tracker = &self.tracker;
-                st.relit_candidates = self.probes.relight(&mut |jobs: &[(SurfacePoint, u64)]| {
+                let estimate = |scene: &Scene, jobs: &[(SurfacePoint, u64)]| {
                     let jobs: Vec<(SurfacePoint, u64)> = jobs.iter().map(|&(y, id)| (y, Self::relight_seed(seed, id))).collect();
                     tracker.radiosity_many(scene, &jobs)
-                });
+                };
+                st.relit_candidates = self.probes.relight(&mut |jobs| estimate(&lit, jobs), &mut |jobs| estimate(scene, jobs));
             }
         } else {
             let jobs: Vec<(SurfacePoint, u64)> =

@@ -93,23 +93,6 @@ impl Leaves {
     }
 }
 
-/// The least of a leaf's distances, halving the lanes (so that it compiles
-/// to a few vector minima). A NaN lane may make the result NaN, which no
-/// `>` test passes: the caller then scans the leaf, as without this bound.
-#[inline]
-fn min_of(d: &[f32; LEAF]) -> f32 {
-    let min = |a: f32, b: f32| if a < b { a } else { b };
-    let mut m = *d;
-    let mut half = LEAF / 2;
-    while half > 0 {
-        for i in 0..half {
-            m[i] = min(m[i], m[i + half]);
-        }
-        half /= 2;
-    }
-    m[0]
-}
-
 /// Squared distance from `q` to the box `lo`–`hi` (0 inside).
 #[inline]
 fn box_dist_sq(q: &[f32; 3], lo: &[f32; 3], hi: &[f32; 3]) -> f32 {
@@ -426,10 +409,6 @@ impl AcceptTree {
                 }
                 *n += theirs.len();
                 let d = self.leaves.dist_sq(ns, q);
-                // Most nodes a query visits hold nothing nearer (the padding is infinite).
-                if min_of(&d) > b.0 {
-                    continue;
-                }
                 for (&d, &j) in d.iter().zip(theirs) {
                     if (d < b.0 || (d == b.0 && j < b.1)) && accept(i as usize, j as usize) {
                         *b = Ranked(d, j);
@@ -506,9 +485,6 @@ impl AcceptTree {
                     continue;
                 }
                 let d = self.leaves.dist_sq(ns, q);
-                if min_of(&d) > b.0 {
-                    continue;
-                }
                 for (&d, &j) in d.iter().zip(theirs) {
                     if (d < b.0 || (d == b.0 && j < b.1)) && i != j {
                         *b = Ranked(d, j);
@@ -609,16 +585,6 @@ impl AcceptTree {
             }
             let s = node.first as usize;
             let d = self.leaves.dist_sq(s, q);
-            // A counting walk that stays short of k here, with its m best
-            // all nearer than this leaf, only counts the leaf's points.
-            if let (None, Some(k)) = (&kth, k)
-                && seen + (node.count as usize) < k
-                && best.len() == m
-                && min_of(&d) > best[m - 1].0
-            {
-                seen += node.count as usize;
-                continue;
-            }
             for (&d, &j) in d.iter().zip(&self.leaves.index[s..s + node.count as usize]) {
                 match (kth.as_deref_mut(), k) {
                     (None, Some(k)) => {

@@ -927,9 +927,9 @@ impl AreaProbes {
             return made;
         }
         let mut d_now = d_now.into_iter();
-        for b in 0..older {
-            for k in &self.tracked[b] {
-                if let Some((d_then, d)) = self.carried[b].get_mut(k.carried as usize).and_then(|c| c.track.as_mut()) {
+        for (carried, tracked) in self.carried.iter_mut().zip(&self.tracked).take(older) {
+            for k in tracked {
+                if let Some((d_then, d)) = carried.get_mut(k.carried as usize).and_then(|c| c.track.as_mut()) {
                     let n = d_now.next().unwrap_or(Vec3::NAN);
                     *d = if n.is_finite() { n } else { *d_then };
                 }

@@ -171,8 +171,9 @@ pub struct SmcSampler {
     next_id: u64,
     iterations: u64,
     lighting: Option<LightingKey>,
-    /// The scene as it was when `lighting` was set: the lights the
-    /// candidates made since then were estimated under.
+    /// The scene as it was when `lighting` was set, where candidates are
+    /// relit ([`Relight::Candidates`]): the lights the candidates made
+    /// since then were estimated under.
     lit: Option<Scene>,
     probes: AreaProbes,
     /// The point each slot's VPL shone from last ([`Placement::Centroid`]).
@@ -636,15 +637,17 @@ impl SmcSampler {
             self.lighting = Some(key);
             // The candidates held, estimated under earlier lights, brought to
             // these: those not relit yet were made under the lights of the
-            // last change, which `lit` holds.
-            let lit = self.lit.replace(scene.clone());
-            if let (true, Some(lit)) = (st.relit && self.config.relight == Relight::Candidates && self.config.probes(), lit) {
-                let tracker = &self.tracker;
-                let estimate = |scene: &Scene, jobs: &[(SurfacePoint, u64)]| {
-                    let jobs: Vec<(SurfacePoint, u64)> = jobs.iter().map(|&(y, id)| (y, Self::relight_seed(seed, id))).collect();
-                    tracker.radiosity_many(scene, &jobs)
-                };
-                st.relit_candidates = self.probes.relight(&mut |jobs| estimate(&lit, jobs), &mut |jobs| estimate(scene, jobs));
+            // last change, which `lit` holds (kept only where candidates are
+            // relit).
+            if self.config.relight == Relight::Candidates && self.config.probes() {
+                if let Some(lit) = self.lit.replace(scene.clone()) {
+                    let tracker = &self.tracker;
+                    let estimate = |scene: &Scene, jobs: &[(SurfacePoint, u64)]| {
+                        let jobs: Vec<(SurfacePoint, u64)> = jobs.iter().map(|&(y, id)| (y, Self::relight_seed(seed, id))).collect();
+                        tracker.radiosity_many(scene, &jobs)
+                    };
+                    st.relit_candidates = self.probes.relight(&mut |jobs| estimate(&lit, jobs), &mut |jobs| estimate(scene, jobs));
+                }
             }
         } else {
             let jobs: Vec<(SurfacePoint, u64)> =

@@ -76,7 +76,7 @@ impl Default for SmcConfig {
             strong_quantile: 0.95,
             flux: FluxEstimator::default(),
             probe_iterations: 16,
-            probes_per_vpl: 4,
+            probes_per_vpl: 3,
             probe_window: ProbeWindow::default(),
             probe_area: ProbeArea::default(),
             placement: Placement::default(),

@@ -67,11 +67,14 @@
 //!   goes out gradually; the weights sum to 1, so the sum stays unbiased
 //!   and the cells still partition it). With every hit kept each cell is
 //!   measured by about 16·T hits. Fewer probes per VPL (`probes-per-vpl`
-//!   below the resample ratio; 4 by default) keep every s-th hit, each
+//!   below the resample ratio; 3 by default) keep every s-th hit, each
 //!   standing for s b (the hits come in the random order of their camera
 //!   points, so the sum stays unbiased), and the candidates among the
 //!   others for their radiance alone. 4 a VPL cut the cells' cost on
-//!   `office` (I = 2048, 2 cores) from 25 to 8 ms a frame; with equal
+//!   `office` (I = 2048, 2 cores) from 25 to 8 ms a frame, and 3 saves
+//!   another 2–4 ms of the step (6,144 new probes an iteration, not 8,192;
+//!   the flicker test 0.965 % a frame against 0.93 % with 4, the image
+//!   means the same within their errors, `docs/performance.md`); with equal
 //!   weights the noisier areas made a static view's image change by 0.87 %
 //!   a frame (every hit: 0.61 %; `cornell`, 1024 VPLs, 20 frame pairs),
 //!   near SMC's 1 %, and the triangle takes it to 0.68 % (every hit:

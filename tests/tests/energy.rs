@@ -115,21 +115,22 @@ fn runs(s: &EnergySettings) -> Vec<EnergyRun> {
 /// of any truth, which was added before, took `corner`'s sequence to ±
 /// 0.022 for one noisy checkpoint of 2.1 %).
 ///
-/// Measured at these settings, frame 0 (16 seeds) and sequence (3 seeds),
-/// ± the standard errors the test judges by: the Munich blocks 0.996 ±
-/// 0.017 and 1.018 ± 0.012 (with the cell flux alone, frame 0: 1.109 ±
-/// 0.016; `vpl_smc::flux`, "Seen from the VPL"), Dabrovic's Sponza 1.000
-/// ± 0.005 and 0.989 ± 0.004, `atrium` 0.983 ± 0.007 and 1.004 ± 0.002,
-/// `office` 0.989 ± 0.008 and 0.996 ± 0.007, `cornell` 1.007 and 1.003,
-/// `maze` 0.994 and 0.988 ± 0.011, `corner` 0.994 and 1.008 ± 0.010,
-/// `building` (its lamp carried from room to room) 0.999 and 0.964 ±
-/// 0.013 (its checkpoint at frame 360, a doorway the lamp has just
-/// passed, is dark at this size: 0.942 over 8 seeds, against 1.000 at
-/// the job's 64×48; `vpl_smc::relight`), `colonnade` 0.975 ± 0.007 and
-/// 0.997, `courtyard` 1.003 and 0.991, `courtyard-sun` (its sun moving)
-/// 1.006 and 1.009, `glass` 1.018 and 1.021. The clamp removed at most
-/// 1.5 % ± 0.6 (the Munich blocks), under 1 % elsewhere. The whole test
-/// took 19 minutes on 2 cores.
+/// Measured at these settings (3 probes a VPL, the parabola window),
+/// frame 0 (16 seeds) and sequence (3 seeds), ± the standard errors the
+/// test judges by: the Munich blocks 0.995 ± 0.017 and 1.018 ± 0.011
+/// (with the cell flux alone and 4 probes a VPL, frame 0: 1.109 ± 0.016;
+/// `vpl_smc::flux`, "Seen from the VPL"), Dabrovic's Sponza 0.992 ± 0.005
+/// and 0.990 ± 0.004, `atrium` 0.984 ± 0.008 and 0.998 ± 0.005, `office`
+/// 0.987 ± 0.008 and 0.997 ± 0.005, `cornell` 1.007 and 1.002, `maze`
+/// 0.993 and 0.989 ± 0.008, `corner` 0.993 and 1.006 ± 0.010, `building`
+/// (its lamp carried from room to room) 0.995 and 0.966 ± 0.011 (its
+/// checkpoint at frame 360, a doorway the lamp has just passed, is dark
+/// at this size: 0.942 over 8 seeds with the old defaults, against 1.000
+/// at the job's 64×48; `vpl_smc::relight`), `colonnade` 0.973 ± 0.007 and
+/// 0.995, `courtyard` 1.003 and 0.993, `courtyard-sun` (its sun moving)
+/// 1.006 and 1.008, `glass` 1.020 and 1.026. The clamp removed at most
+/// 1.6 % ± 0.6 (the Munich blocks), under 1 % elsewhere. The whole test
+/// took 22 minutes on 2 cores.
 #[test]
 fn the_default_smc_keeps_the_light_and_its_clamp_takes_at_most_5_percent() {
     let mut failures = Vec::new();

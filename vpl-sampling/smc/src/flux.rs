@@ -1837,8 +1837,9 @@ mod tests {
     }
 
     /// The triangle window weighs the iterations 1, 2, …, 2, 1 and the
-    /// parabola (b + 1)(T − b) (each summing to 1); a cell's area is that weighted mean of its iterations' areas,
-    /// and the cells still sum to the probes' area.
+    /// parabola (b + 1)(T − b) (each summing to 1); a cell's area is that
+    /// weighted mean of its iterations' areas, and the cells still sum to
+    /// the probes' area.
     #[test]
     fn the_windows_weigh_the_middle_iterations_most() {
         let scene = floor(false);

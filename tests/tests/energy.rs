@@ -48,9 +48,16 @@ fn sequence(run: &EnergyRun) -> Estimate {
 const Z: f64 = 2.5;
 
 /// The test's settings: the sampler's defaults (I = 2048, its warm-up),
-/// 3 seeds along the sequences and 16 at frame 0 (one frame's image mean
-/// varies more between seeds: on the Munich blocks its spread over seeds
-/// is about 7 %, so 3 seeds would leave a standard error of 4 %), 48×36
+/// 3 seeds along the sequences and at frame 0 as many as it takes for
+/// their standard error to reach 0.007, at least 8 and at most 16 (one
+/// frame's image mean varies more between seeds: on the Munich blocks
+/// its spread over seeds is about 7 %, so 3 seeds would leave a standard
+/// error of 4 %, and 16 take it to 1.7 %; on `cornell` or `glass` it is
+/// under 1 %, and 8 seeds reach 0.007). 0.007 is about the truth's own
+/// relative error at this size (0.6 % on `office`), so the two together
+/// stay under 1 %: a seed past that buys little. Each seed at frame 0
+/// costs the sampler's 100 warm-up iterations, and 16 of them on every
+/// scene were most of the test's time. 48×36
 /// pixels, the truth at 256 paths a pixel through the pixel
 /// centres; 3 checkpoints at the centres of the sequence's thirds, the
 /// sampler stepped every 8th frame and then at each of the 32 frames (2T)
@@ -62,6 +69,7 @@ fn settings(sampler: &str) -> EnergySettings {
         size: (48, 36),
         seeds: 3,
         frame0_seeds: 16,
+        frame0_se: 0.007,
         checkpoints: 3,
         stride: 8,
         settle: 32,
@@ -82,9 +90,10 @@ fn runs(s: &EnergySettings) -> Vec<EnergyRun> {
             let run = measure(&registry, &name, &setup, s, &mut |_| {}).unwrap();
             let (f0, seq, clamp) = (frame0(&run), sequence(&run), run.clamp_removed());
             eprintln!(
-                "{name}: frame 0 {:.3} ± {:.3}, sequence {:.3} ± {:.3}, clamp removes {:.2} % ± {:.2} ({:.0} s)",
+                "{name}: frame 0 {:.3} ± {:.3} ({} seeds), sequence {:.3} ± {:.3}, clamp removes {:.2} % ± {:.2} ({:.0} s)",
                 f0.mean,
                 f0.se,
+                run.frames[0].unclamped.len(),
                 seq.mean,
                 seq.se,
                 100.0 * clamp.mean,

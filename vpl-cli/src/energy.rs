@@ -33,6 +33,10 @@ pub(super) struct Args {
     /// one frame's image mean varies more between seeds than a sequence's.
     #[arg(long = "frame0-seeds", default_value_t = 16)]
     frame0_seeds: u32,
+    /// Stop adding seeds at frame 0 once their ratio's standard error is at most this (after at
+    /// least 8 and --seeds; 0: all of --frame0-seeds run).
+    #[arg(long = "frame0-se", default_value_t = 0.0)]
+    frame0_se: f64,
     /// First seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -74,6 +78,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         size: Size(w, h),
         seeds,
         frame0_seeds,
+        frame0_se,
         seed,
         checkpoints,
         stride,
@@ -87,6 +92,9 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
     if seeds == 0 || vpls == 0 || spp == 0 || stride == 0 {
         return Err("--seeds, --vpls, --spp and --stride must be at least 1".into());
     }
+    if !(frame0_se >= 0.0 && frame0_se.is_finite()) {
+        return Err(format!("--frame0-se {frame0_se}: expected a standard error of 0 or more"));
+    }
     let mut params = vpl_core::Params::new();
     for item in &set {
         let (k, value) = item.split_once('=').ok_or_else(|| format!("--set {item}: expected KEY=VALUE"))?;
@@ -99,6 +107,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         size: (w, h),
         seeds,
         frame0_seeds,
+        frame0_se,
         seed,
         checkpoints,
         stride,
@@ -143,6 +152,7 @@ pub(super) fn run(args: Args, registry: &Registry) -> Res<()> {
         "size": [w, h],
         "seeds": seeds,
         "frame0_seeds": seeds.max(frame0_seeds),
+        "frame0_se": frame0_se,
         "seed": seed,
         "stride": stride,
         "settle": settle,

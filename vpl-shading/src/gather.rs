@@ -67,6 +67,66 @@ pub(crate) fn gather(
     }
 }
 
+/// [`gather`] without a clamp into `free` and under `g_max` into
+/// `clamped`, in one pass: each (receiver, VPL) pair's visibility is asked
+/// once for both. The clamped weight is the unclamped one, visibility
+/// included, times r = min(1, G_max / G): exactly it where G ≤ G_max, and
+/// within a rounding of min(G, G_max) · V elsewhere. `free` is bit for bit
+/// what [`gather`] gives without a clamp. `w` and `r` are scratch space.
+// The lanes index several arrays at once, which is what lets the loops vectorise.
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+pub(crate) fn gather_free_and_clamped(
+    rx: &Receivers,
+    vpls: &VplSet,
+    slots: &[u32],
+    vis: &dyn VplVisibility,
+    g_max: f32,
+    free: &mut Sums,
+    clamped: &mut Sums,
+    (w, r): (&mut Vec<f32>, &mut Vec<f32>),
+) {
+    let n = rx.len();
+    if let Some(sm) = vis.shadow_maps() {
+        // The shadow-map gather reads its maps per pair: no query to share.
+        crate::gather_maps::gather_shadow_maps(rx, vpls, slots, sm, f32::INFINITY, free);
+        return crate::gather_maps::gather_shadow_maps(rx, vpls, slots, sm, g_max, clamped);
+    }
+    w.resize(n, 0.0);
+    r.resize(n, 0.0);
+    for &slot in slots {
+        let Some(v) = vpls.get(slot as usize) else { continue };
+        let (y, ny) = (v.y, v.n);
+        let mut any = false;
+        for i in 0..n {
+            let dx = rx.px[i] - y.x;
+            let dy = rx.py[i] - y.y;
+            let dz = rx.pz[i] - y.z;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let cos_y = ny.x * dx + ny.y * dy + ny.z * dz;
+            let cos_x = -(rx.nx[i] * dx + rx.ny[i] * dy + rx.nz[i] * dz);
+            let g = (cos_y * cos_x / (d2 * d2)).min(f32::INFINITY);
+            let g = if cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0 { g } else { 0.0 };
+            any |= g > 0.0;
+            w[i] = g;
+            r[i] = if g > g_max { g_max / g } else { 1.0 };
+        }
+        if !any {
+            continue;
+        }
+        vis.attenuate(slot as usize, rx, w);
+        let f = v.flux;
+        for i in 0..n {
+            let (wf, wc) = (w[i], w[i] * r[i]);
+            free.r[i] += f.x * wf;
+            free.g[i] += f.y * wf;
+            free.b[i] += f.z * wf;
+            clamped.r[i] += f.x * wc;
+            clamped.g[i] += f.y * wc;
+            clamped.b[i] += f.z * wc;
+        }
+    }
+}
+
 /// The clamped geometry term min(G, G_max) between a receiver at `x` with
 /// normal `n_x` and the VPL `v`, as [`gather`] computes it lane by lane
 /// (cos_y cos_x / d², zero where either side faces away); for the shaders

@@ -102,8 +102,9 @@ impl Default for EnergySettings {
 /// The fewest seeds at frame 0 that [`EnergySettings::frame0_se`] stops
 /// at: below that the seeds' own standard error is too uncertain to stop
 /// on (from 8 seeds, 7 degrees of freedom, it is under 0.56 of the true
-/// one 5 % of the time; from 4, 3 degrees, 18 % of the time, and 5 seeds
-/// of `colonnade` once stopped at a spread of 0.9 % where 16 gave 2.2 %).
+/// one 5 % of the time; from 4, 3 degrees, 18 % of the time: 5 seeds of
+/// `colonnade` that happened to agree once stopped at 0.961 ± 0.007 in
+/// the energy test, where 16 gave 0.973 ± 0.007).
 pub const FRAME0_MIN_SEEDS: usize = 8;
 
 /// One rendered frame: the truth and every seed's images.

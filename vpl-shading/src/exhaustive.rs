@@ -4,7 +4,7 @@ use crate::gather::{Sums, gather, gather_free_and_clamped, slice};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use vpl_core::glam::Vec3;
-use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, VplSet, VplVisibility};
+use vpl_core::{GBuffer, GeometryClamp, Image, IndirectShader, Receivers, VplSet, VplVisibility};
 
 /// Receivers per parallel task.
 const CHUNK: usize = 1024;
@@ -27,28 +27,32 @@ impl ExhaustiveShader {
     pub fn shade_free_and_clamped(&self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility, clamp: GeometryClamp) -> (Image, Image) {
         let rx = gbuf.receivers(0..gbuf.samples.len() as u32);
         let slots: Vec<u32> = (0..vpls.len() as u32).collect();
-        let starts: Vec<usize> = (0..rx.len()).step_by(CHUNK).collect();
-        let parts: Vec<(usize, Sums, Sums)> = starts
-            .into_par_iter()
-            .map(|s| {
-                let e = (s + CHUNK).min(rx.len());
-                let part = slice(&rx, s, e);
-                let (mut free, mut clamped) = (Sums::zeros(e - s), Sums::zeros(e - s));
-                let mut scratch = (Vec::new(), Vec::new());
-                gather_free_and_clamped(&part, vpls, &slots, vis, clamp.g_max, &mut free, &mut clamped, (&mut scratch.0, &mut scratch.1));
-                (s, free, clamped)
-            })
-            .collect();
+        let parts = per_chunk(&rx, |part| {
+            let (mut free, mut clamped) = (Sums::zeros(part.len()), Sums::zeros(part.len()));
+            gather_free_and_clamped(part, vpls, &slots, vis, clamp.g_max, &mut free, &mut clamped, (&mut Vec::new(), &mut Vec::new()));
+            (free, clamped)
+        });
         let mut images = (Image::new(gbuf.width, gbuf.height), Image::new(gbuf.width, gbuf.height));
-        for (s, free, clamped) in parts {
-            for k in 0..free.r.len() {
-                let p = rx.pixel[s + k] as usize;
-                let a = gbuf.samples[p].albedo * FRAC_1_PI;
-                images.0.data[p] = a * Vec3::new(free.r[k], free.g[k], free.b[k]);
-                images.1.data[p] = a * Vec3::new(clamped.r[k], clamped.g[k], clamped.b[k]);
-            }
+        for (s, (free, clamped)) in parts {
+            write_sums(&mut images.0, gbuf, &rx, s, &free);
+            write_sums(&mut images.1, gbuf, &rx, s, &clamped);
         }
         images
+    }
+}
+
+/// `work` on each run of [`CHUNK`] receivers of `rx`, in parallel, with
+/// the index of the run's first receiver.
+fn per_chunk<T: Send>(rx: &Receivers, work: impl Fn(&Receivers) -> T + Sync) -> Vec<(usize, T)> {
+    let starts: Vec<usize> = (0..rx.len()).step_by(CHUNK).collect();
+    starts.into_par_iter().map(|s| (s, work(&slice(rx, s, (s + CHUNK).min(rx.len()))))).collect()
+}
+
+/// The pixels of the receivers `s..` of `rx` that `sums` holds: albedo / π · Σ.
+fn write_sums(img: &mut Image, gbuf: &GBuffer, rx: &Receivers, s: usize, sums: &Sums) {
+    for k in 0..sums.r.len() {
+        let p = rx.pixel[s + k] as usize;
+        img.data[p] = gbuf.samples[p].albedo * FRAC_1_PI * Vec3::new(sums.r[k], sums.g[k], sums.b[k]);
     }
 }
 
@@ -64,23 +68,14 @@ impl IndirectShader for ExhaustiveShader {
     fn shade(&mut self, gbuf: &GBuffer, vpls: &VplSet, vis: &dyn VplVisibility) -> Image {
         let rx = gbuf.receivers(0..gbuf.samples.len() as u32);
         let slots: Vec<u32> = (0..vpls.len() as u32).collect();
-        let starts: Vec<usize> = (0..rx.len()).step_by(CHUNK).collect();
-        let parts: Vec<(usize, Sums)> = starts
-            .into_par_iter()
-            .map(|s| {
-                let e = (s + CHUNK).min(rx.len());
-                let part = slice(&rx, s, e);
-                let mut sums = Sums::zeros(e - s);
-                gather(&part, vpls, &slots, vis, self.clamp, &mut sums, &mut Vec::new());
-                (s, sums)
-            })
-            .collect();
+        let parts = per_chunk(&rx, |part| {
+            let mut sums = Sums::zeros(part.len());
+            gather(part, vpls, &slots, vis, self.clamp, &mut sums, &mut Vec::new());
+            sums
+        });
         let mut img = Image::new(gbuf.width, gbuf.height);
         for (s, sums) in parts {
-            for k in 0..sums.r.len() {
-                let p = rx.pixel[s + k] as usize;
-                img.data[p] = gbuf.samples[p].albedo * FRAC_1_PI * Vec3::new(sums.r[k], sums.g[k], sums.b[k]);
-            }
+            write_sums(&mut img, gbuf, &rx, s, &sums);
         }
         img
     }

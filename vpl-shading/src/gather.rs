@@ -39,22 +39,7 @@ pub(crate) fn gather(
     w.resize(n, 0.0);
     for &slot in slots {
         let Some(v) = vpls.get(slot as usize) else { continue };
-        let (y, ny) = (v.y, v.n);
-        // Unshadowed, clamped geometry term; branch-free so it vectorises.
-        let mut any = false;
-        for i in 0..n {
-            let dx = rx.px[i] - y.x;
-            let dy = rx.py[i] - y.y;
-            let dz = rx.pz[i] - y.z;
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let cos_y = ny.x * dx + ny.y * dy + ny.z * dz;
-            let cos_x = -(rx.nx[i] * dx + rx.ny[i] * dy + rx.nz[i] * dz);
-            let g = (cos_y * cos_x / (d2 * d2)).min(g_max);
-            let g = if cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0 { g } else { 0.0 };
-            any |= g > 0.0;
-            w[i] = g;
-        }
-        if !any {
+        if !geometry_terms(rx, v, g_max, w) {
             continue;
         }
         vis.attenuate(slot as usize, rx, w);
@@ -65,6 +50,30 @@ pub(crate) fn gather(
             sums.b[i] += f.z * w[i];
         }
     }
+}
+
+/// The unshadowed geometry term min(G, G_max) of VPL `v` at every receiver
+/// of `rx` into `w` (zero where either side faces away); branch-free so it
+/// vectorises. Whether any term is above zero.
+// The lanes index several arrays at once, which is what lets the loop vectorise.
+#[allow(clippy::needless_range_loop)]
+#[inline]
+fn geometry_terms(rx: &Receivers, v: &vpl_core::Vpl, g_max: f32, w: &mut [f32]) -> bool {
+    let (y, ny) = (v.y, v.n);
+    let mut any = false;
+    for i in 0..rx.len() {
+        let dx = rx.px[i] - y.x;
+        let dy = rx.py[i] - y.y;
+        let dz = rx.pz[i] - y.z;
+        let d2 = dx * dx + dy * dy + dz * dz;
+        let cos_y = ny.x * dx + ny.y * dy + ny.z * dz;
+        let cos_x = -(rx.nx[i] * dx + rx.ny[i] * dy + rx.nz[i] * dz);
+        let g = (cos_y * cos_x / (d2 * d2)).min(g_max);
+        let g = if cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0 { g } else { 0.0 };
+        any |= g > 0.0;
+        w[i] = g;
+    }
+    any
 }
 
 /// [`gather`] without a clamp into `free` and under `g_max` into
@@ -95,23 +104,11 @@ pub(crate) fn gather_free_and_clamped(
     r.resize(n, 0.0);
     for &slot in slots {
         let Some(v) = vpls.get(slot as usize) else { continue };
-        let (y, ny) = (v.y, v.n);
-        let mut any = false;
-        for i in 0..n {
-            let dx = rx.px[i] - y.x;
-            let dy = rx.py[i] - y.y;
-            let dz = rx.pz[i] - y.z;
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let cos_y = ny.x * dx + ny.y * dy + ny.z * dz;
-            let cos_x = -(rx.nx[i] * dx + rx.ny[i] * dy + rx.nz[i] * dz);
-            let g = (cos_y * cos_x / (d2 * d2)).min(f32::INFINITY);
-            let g = if cos_y > 0.0 && cos_x > 0.0 && d2 > 0.0 { g } else { 0.0 };
-            any |= g > 0.0;
-            w[i] = g;
-            r[i] = if g > g_max { g_max / g } else { 1.0 };
-        }
-        if !any {
+        if !geometry_terms(rx, v, f32::INFINITY, w) {
             continue;
+        }
+        for i in 0..n {
+            r[i] = if w[i] > g_max { g_max / w[i] } else { 1.0 };
         }
         vis.attenuate(slot as usize, rx, w);
         let f = v.flux;

@@ -466,47 +466,77 @@ impl AcceptTree {
     /// The nearest other point of each point of leaf `l`, in the leaf's
     /// order (ties to the lower index): the leaf's own points first, so that
     /// the walk starts with a bound, then one walk, nearer node first, that
-    /// skips a node whose box lies beyond every point's best so far (the
-    /// box-to-box distance bounds each point's distance to the node's
-    /// points), and a point whose own distance to a leaf's box exceeds its
-    /// best. A node at exactly that distance is still walked: it may hold a
-    /// tie of lower index.
+    /// skips a node whose box lies farther from every point of the leaf than
+    /// its best so far. A node at exactly that distance is still walked: it
+    /// may hold a tie of lower index.
+    ///
+    /// The leaf's points are lanes: each point of a visited node is compared
+    /// with all of them at once (distances, then the better of the two by
+    /// distance and index, as selects), and the box test is one step over
+    /// the lanes too. The best of each lane is the least (distance, index)
+    /// over the points it was compared with, whatever their order.
     fn leaf_nearest(&self, l: usize) -> [Ranked; LEAF] {
         let leaf = self.nodes[l];
-        let (s, e) = (leaf.first as usize, (leaf.first + leaf.count) as usize);
-        let qs: Vec<[f32; 3]> = (s..e).map(|i| self.leaves.point(i)).collect();
-        let own = &self.leaves.index[s..e];
-        let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
-        let visit = |best: &mut [Ranked; LEAF], node: &Node| {
+        let (s, count) = (leaf.first as usize, leaf.count as usize);
+        let lanes = |v: &[f32]| -> [f32; LEAF] { v[s..s + LEAF].try_into().unwrap_or([f32::INFINITY; LEAF]) };
+        let (qx, qy, qz) = (lanes(&self.leaves.x), lanes(&self.leaves.y), lanes(&self.leaves.z));
+        let own: [u32; LEAF] = self.leaves.index[s..s + LEAF].try_into().unwrap_or([u32::MAX; LEAF]);
+        // The padding lanes hold a negative best, which no distance beats
+        // and no box is within.
+        let mut bd = [f32::INFINITY; LEAF];
+        let mut bi = [u32::MAX; LEAF];
+        bd[count..].fill(-1.0);
+        let visit = |bd: &mut [f32; LEAF], bi: &mut [u32; LEAF], node: &Node| {
             let ns = node.first as usize;
-            let theirs = &self.leaves.index[ns..ns + node.count as usize];
-            for ((q, &i), b) in qs.iter().zip(own).zip(best.iter_mut()) {
-                if box_dist_sq(q, &node.lo, &node.hi) > b.0 {
-                    continue;
-                }
-                let d = self.leaves.dist_sq(ns, q);
-                for (&d, &j) in d.iter().zip(theirs) {
-                    if (d < b.0 || (d == b.0 && j < b.1)) && i != j {
-                        *b = Ranked(d, j);
-                    }
+            for k in ns..ns + node.count as usize {
+                let (px, py, pz, j) = (self.leaves.x[k], self.leaves.y[k], self.leaves.z[k], self.leaves.index[k]);
+                for t in 0..LEAF {
+                    // The order of `Leaves::dist_sq`: (x² + y²) + z².
+                    let (x, y, z) = (px - qx[t], py - qy[t], pz - qz[t]);
+                    let d = x * x + y * y + z * z;
+                    let better = ((d < bd[t]) | ((d == bd[t]) & (j < bi[t]))) & (own[t] != j);
+                    // Selects as masks, which SSE2 has (it has no blend).
+                    let m = 0u32.wrapping_sub(better as u32);
+                    bd[t] = f32::from_bits((d.to_bits() & m) | (bd[t].to_bits() & !m));
+                    bi[t] = (j & m) | (bi[t] & !m);
                 }
             }
         };
-        visit(&mut best, &leaf);
-        let bound = |best: &[Ranked; LEAF]| best[..qs.len()].iter().fold(0.0f32, |m, r| m.max(r.0));
+        // Whether any lane's best may be matched within `node`'s box.
+        let asks = |bd: &[f32; LEAF], node: &Node| -> bool {
+            let mut d = [0.0f32; LEAF];
+            for (a, q) in [&qx, &qy, &qz].into_iter().enumerate() {
+                for t in 0..LEAF {
+                    let e = (node.lo[a] - q[t]).max(q[t] - node.hi[a]).max(0.0);
+                    d[t] += e * e;
+                }
+            }
+            let mut any = false;
+            for t in 0..LEAF {
+                any |= d[t] <= bd[t];
+            }
+            any
+        };
+        visit(&mut bd, &mut bi, &leaf);
+        let bound = |bd: &[f32; LEAF]| bd[..count].iter().fold(0.0f32, |m, &d| m.max(d));
         let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
         while let Some((at, b)) = walk.pop() {
-            if b > bound(&best) {
+            if b > bound(&bd) {
                 continue;
             }
             let node = self.nodes[at as usize];
-            if node.count == 0 {
-                self.push_children(&mut walk, &leaf, &node);
+            if !asks(&bd, &node) {
                 continue;
             }
-            if at as usize != l {
-                visit(&mut best, &node);
+            if node.count == 0 {
+                self.push_children(&mut walk, &leaf, &node);
+            } else if at as usize != l {
+                visit(&mut bd, &mut bi, &node);
             }
+        }
+        let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
+        for t in 0..count {
+            best[t] = Ranked(bd[t], bi[t]);
         }
         best
     }

@@ -43,7 +43,7 @@ pub fn camera_points_of(scene: &Scene, rays: &dyn RayCaster, batch: &CameraRays)
     let hits = rays.intersect_camera(scene, batch);
     batch
         .rays
-        .iter()
+        .par_iter()
         .zip(hits)
         .enumerate()
         .filter_map(|(i, (ray, hit))| {
@@ -102,7 +102,7 @@ fn candidate_rays(scene: &Scene, xs: &[CameraPoint], seed: u64, iteration: u64) 
 
 /// The hits of the candidate rays that reflect back toward their origin.
 fn keep_candidates(scene: &Scene, cast: &[(u32, Ray)], hits: Vec<Option<vpl_core::Hit>>) -> Vec<CandidateHit> {
-    cast.iter()
+    cast.par_iter()
         .zip(hits)
         .filter_map(|((j, ray), hit)| {
             let (y, _) = scene.reflecting(ray, hit?)?;

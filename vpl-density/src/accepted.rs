@@ -463,6 +463,106 @@ impl AcceptTree {
         out
     }
 
+    /// The squared distance from every point of the set to its `k`-th
+    /// nearest other point, by index in the set (infinite where the set
+    /// has fewer than k other points; `k` at least 1). One walk per leaf
+    /// answers for its points at once, as [`AcceptTree::members_nearest`]
+    /// does, each point keeping its k smallest distances.
+    pub(crate) fn members_kth(&self, k: usize) -> Vec<f32> {
+        let mut out = vec![f32::INFINITY; self.len];
+        if k == 0 {
+            return out;
+        }
+        let leaves: Vec<usize> = (0..self.nodes.len()).filter(|&i| self.nodes[i].count > 0).collect();
+        let found: Vec<[f32; LEAF]> = leaves.par_iter().map(|&l| self.leaf_kth(l, k)).collect();
+        for (&l, kth) in leaves.iter().zip(found) {
+            let node = self.nodes[l];
+            let s = node.first as usize;
+            for (&i, d) in self.leaves.index[s..s + node.count as usize].iter().zip(kth) {
+                out[i as usize] = d;
+            }
+        }
+        out
+    }
+
+    /// The k-th smallest distance from each point of leaf `l` to the other
+    /// points, in the leaf's order: each lane keeps its k smallest so far,
+    /// sorted, and a point of a visited node enters a lane's list only
+    /// where it is nearer than the lane's k-th (tested for all lanes at
+    /// once). A node is skipped when its box lies beyond every lane's k-th:
+    /// it can hold no smaller distance. The multiset of the k smallest, so
+    /// its k-th, does not depend on the order the points are met in.
+    fn leaf_kth(&self, l: usize, k: usize) -> [f32; LEAF] {
+        let leaf = self.nodes[l];
+        let (s, count) = (leaf.first as usize, leaf.count as usize);
+        let lanes = |v: &[f32]| -> [f32; LEAF] { v[s..s + LEAF].try_into().unwrap_or([f32::INFINITY; LEAF]) };
+        let (qx, qy, qz) = (lanes(&self.leaves.x), lanes(&self.leaves.y), lanes(&self.leaves.z));
+        let own: [u32; LEAF] = self.leaves.index[s..s + LEAF].try_into().unwrap_or([u32::MAX; LEAF]);
+        // Lane t's k smallest, ascending, at t·k; its k-th apart. The
+        // padding lanes hold a negative k-th, which nothing beats.
+        let mut lists = vec![f32::INFINITY; LEAF * k];
+        let mut kth = [f32::INFINITY; LEAF];
+        kth[count..].fill(-1.0);
+        let mut visit = |kth: &mut [f32; LEAF], node: &Node| {
+            let ns = node.first as usize;
+            for p in ns..ns + node.count as usize {
+                let (px, py, pz, j) = (self.leaves.x[p], self.leaves.y[p], self.leaves.z[p], self.leaves.index[p]);
+                let mut d = [0.0f32; LEAF];
+                let mut nearer = [false; LEAF];
+                for t in 0..LEAF {
+                    // The order of `Leaves::dist_sq`: (x² + y²) + z².
+                    let (x, y, z) = (px - qx[t], py - qy[t], pz - qz[t]);
+                    d[t] = x * x + y * y + z * z;
+                    nearer[t] = (d[t] < kth[t]) & (own[t] != j);
+                }
+                if !nearer.contains(&true) {
+                    continue;
+                }
+                for t in 0..count {
+                    if nearer[t] {
+                        let list = &mut lists[t * k..(t + 1) * k];
+                        let at = list.partition_point(|&e| e <= d[t]);
+                        list.copy_within(at..k - 1, at + 1);
+                        list[at] = d[t];
+                        kth[t] = list[k - 1];
+                    }
+                }
+            }
+        };
+        let reaches = |kth: &[f32; LEAF], node: &Node| -> bool {
+            let mut d = [0.0f32; LEAF];
+            for (a, q) in [&qx, &qy, &qz].into_iter().enumerate() {
+                for t in 0..LEAF {
+                    let e = (node.lo[a] - q[t]).max(q[t] - node.hi[a]).max(0.0);
+                    d[t] += e * e;
+                }
+            }
+            let mut any = false;
+            for t in 0..LEAF {
+                any |= d[t] < kth[t];
+            }
+            any
+        };
+        visit(&mut kth, &leaf);
+        let bound = |kth: &[f32; LEAF]| kth[..count].iter().fold(0.0f32, |m, &d| m.max(d));
+        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
+        while let Some((at, b)) = walk.pop() {
+            if b >= bound(&kth) {
+                continue;
+            }
+            let node = self.nodes[at as usize];
+            if !reaches(&kth, &node) {
+                continue;
+            }
+            if node.count == 0 {
+                self.push_children(&mut walk, &leaf, &node);
+            } else if at as usize != l {
+                visit(&mut kth, &node);
+            }
+        }
+        kth
+    }
+
     /// The nearest other point of each point of leaf `l`, in the leaf's
     /// order (ties to the lower index): the leaf's own points first, so that
     /// the walk starts with a bound, then one walk, nearer node first, that

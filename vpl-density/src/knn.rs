@@ -115,13 +115,16 @@ impl KnnDensity {
     /// Squared distance from every point of the set to its `k`-th nearest
     /// *other* point (the point itself is not its own neighbour), in the
     /// order the points were given. A set of at most `k` points gives
-    /// infinite radii (no k-th neighbour exists).
+    /// infinite radii (no k-th neighbour exists). One walk per leaf of
+    /// the predicate tree answers for all of the leaf's points
+    /// (`accepted.rs`); the radii equal those of a k + 1 nearest search
+    /// from each point ([`KnnDensity::radius_sq`]), itself included.
     pub fn member_radii_sq(&self, k: usize) -> Vec<f32> {
         let n = self.points.len();
-        let Some(kk) = NonZero::new(k + 1).filter(|kk| kk.get() <= n) else {
-            return vec![f32::INFINITY; n];
-        };
-        self.points.par_iter().map(|q| self.kth(q, kk)).collect()
+        if k == 0 || k >= n {
+            return vec![if k == 0 { 0.0 } else { f32::INFINITY }; n];
+        }
+        self.accepted().members_kth(k)
     }
 
     /// The nearest point of the set to `q` that `accept` takes (by index),
@@ -308,6 +311,33 @@ mod tests {
         assert_eq!(d.nearest_accepted(Vec3::ZERO, None, |j| j > 9), None);
         assert_eq!(d.nearest_accepted_n(Vec3::ZERO, None, |j| j != 1, 3), vec![(0, 0.0), (2, 4.0), (3, 9.0)]);
         assert_eq!(d.members(5), vec![0.0; 5]);
+    }
+
+    /// Every member's k-th radius is the (k + 1)-th of a search from it,
+    /// itself included, bit for bit: random clouds, a plane, and points
+    /// repeated (distance 0 to another member), for several k.
+    #[test]
+    fn member_radii_are_those_of_a_search_from_each_member() {
+        let mut rng = vpl_core::rng::stream(3, 0, vpl_core::rng::Purpose::TEST, 0);
+        for (case, n) in [(0, 3000), (1, 700), (2, 64), (3, 17)] {
+            let mut pts: Vec<Vec3> = (0..n)
+                .map(|_| {
+                    let (a, b) = rng.next_2d();
+                    Vec3::new(a * 10.0, if case == 1 { 2.0 } else { rng.next_f32() * 3.0 }, b * 4.0)
+                })
+                .collect();
+            for i in (0..n).step_by(7) {
+                pts[i] = pts[i / 2];
+            }
+            let d = KnnDensity::new(&pts).unwrap();
+            for k in [1, 2, 8, 16] {
+                let radii = d.member_radii_sq(k);
+                for (i, p) in pts.iter().enumerate() {
+                    let want = if k < n { d.radius_sq(*p, k + 1).unwrap() } else { f32::INFINITY };
+                    assert_eq!(radii[i].to_bits(), want.to_bits(), "case {case}, k {k}, point {i}");
+                }
+            }
+        }
     }
 
     #[test]

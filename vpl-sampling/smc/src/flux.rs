@@ -1028,9 +1028,12 @@ impl AreaProbes {
         // 60°) are tried first, nearest first; then those around an edge
         // (within 120°). The first the probe sees owns it.
         let mut owner: Vec<Option<usize>> = vec![None; todo.len()];
-        let same_surface = |q: &Probe, i: usize| sites[i].n.dot(q.n) > SAME_SURFACE_COS;
+        // The sites' normals side by side: the walks ask for them at every
+        // nearer site.
+        let site_n: Vec<Vec3> = sites.iter().map(|s| s.n).collect();
+        let same_surface = |q: &Probe, i: usize| site_n[i].dot(q.n) > SAME_SURFACE_COS;
         let around_edge = |q: &Probe, i: usize| {
-            let c = sites[i].n.dot(q.n);
+            let c = site_n[i].dot(q.n);
             c > SAME_SIDE_COS && c <= SAME_SURFACE_COS
         };
         // The nearest site on the probe's surface first (usually the owner;
@@ -1041,8 +1044,9 @@ impl AreaProbes {
         // few that fail the first try, so that speculating costs few rays).
         let probes: Vec<&Probe> = todo.iter().map(|&(b, k)| &self.batches[b][k]).collect();
         let points: Vec<Vec3> = probes.iter().map(|q| q.p).collect();
+        let probe_n: Vec<Vec3> = probes.iter().map(|q| q.n).collect();
         let first: Vec<(usize, usize)> = tree
-            .nearest_accepted_each(&points, |t, i| same_surface(probes[t], i))
+            .nearest_accepted_each(&points, |t, i| site_n[i].dot(probe_n[t]) > SAME_SURFACE_COS)
             .into_iter()
             .enumerate()
             .filter_map(|(t, found)| found.map(|(i, _)| (t, i)))
@@ -1097,7 +1101,7 @@ impl AreaProbes {
                 // keeps its light where the surface is.
                 let neighbour = self.neighbour_owners(live, todo[t], 1, reach[t]).0.first().copied();
                 neighbour.or_else(|| {
-                    let same_side = tree.nearest_accepted(q.p, None, |i| sites[i].n.dot(q.n) > SAME_SIDE_COS);
+                    let same_side = tree.nearest_accepted(q.p, None, |i| site_n[i].dot(q.n) > SAME_SIDE_COS);
                     same_side.or_else(|| tree.nearest_accepted(q.p, None, |_| true)).map(|(i, _)| i)
                 })
             })

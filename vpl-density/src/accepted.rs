@@ -231,6 +231,56 @@ impl Walk {
     }
 }
 
+/// The points of one leaf as lanes, by coordinate (the padding at
+/// infinity, index `u32::MAX`), for the walks that answer for all of them
+/// at once.
+struct Lanes {
+    x: [f32; LEAF],
+    y: [f32; LEAF],
+    z: [f32; LEAF],
+    own: [u32; LEAF],
+    /// The leaf's points; the lanes past them are padding.
+    count: usize,
+}
+
+impl Lanes {
+    /// The points of `leaf`, a leaf of `tree`.
+    fn of(tree: &AcceptTree, leaf: &Node) -> Lanes {
+        let s = leaf.first as usize;
+        let lanes = |v: &[f32]| -> [f32; LEAF] { v[s..s + LEAF].try_into().unwrap_or([f32::INFINITY; LEAF]) };
+        let own = tree.leaves.index[s..s + LEAF].try_into().unwrap_or([u32::MAX; LEAF]);
+        Lanes { x: lanes(&tree.leaves.x), y: lanes(&tree.leaves.y), z: lanes(&tree.leaves.z), own, count: leaf.count as usize }
+    }
+
+    /// Squared distances from point `p` of `leaves` to the lanes, in the
+    /// order of [`Leaves::dist_sq`]: (x² + y²) + z².
+    // The lanes index several arrays at once, which is what lets the loop vectorise.
+    #[allow(clippy::needless_range_loop)]
+    #[inline]
+    fn dist_sq(&self, p: usize, leaves: &Leaves) -> [f32; LEAF] {
+        let (px, py, pz) = (leaves.x[p], leaves.y[p], leaves.z[p]);
+        let mut d = [0.0f32; LEAF];
+        for t in 0..LEAF {
+            let (x, y, z) = (px - self.x[t], py - self.y[t], pz - self.z[t]);
+            d[t] = x * x + y * y + z * z;
+        }
+        d
+    }
+
+    /// Squared distances from the lanes to `node`'s box (0 inside).
+    #[inline]
+    fn box_dist_sq(&self, node: &Node) -> [f32; LEAF] {
+        let mut d = [0.0f32; LEAF];
+        for (a, q) in [&self.x, &self.y, &self.z].into_iter().enumerate() {
+            for t in 0..LEAF {
+                let e = (node.lo[a] - q[t]).max(q[t] - node.hi[a]).max(0.0);
+                d[t] += e * e;
+            }
+        }
+        d
+    }
+}
+
 impl AcceptTree {
     /// The tree over `points` (finite, at most u32::MAX of them). The
     /// halves of a large node are built in parallel; each subtree's nodes
@@ -449,18 +499,7 @@ impl AcceptTree {
     /// slower (in the set's own order, which may be random, a walk per
     /// point also waits on memory: 3× slower again).
     pub(crate) fn members_nearest(&self) -> Vec<Option<(usize, f32)>> {
-        let n = self.len;
-        let leaves: Vec<usize> = (0..self.nodes.len()).filter(|&i| self.nodes[i].count > 0).collect();
-        let found: Vec<[Ranked; LEAF]> = leaves.par_iter().map(|&l| self.leaf_nearest(l)).collect();
-        let mut out = vec![None; n];
-        for (&l, best) in leaves.iter().zip(found) {
-            let node = self.nodes[l];
-            let (s, e) = (node.first as usize, (node.first + node.count) as usize);
-            for (&i, r) in self.leaves.index[s..e].iter().zip(best) {
-                out[i as usize] = (r.1 != u32::MAX).then_some((r.1 as usize, r.0));
-            }
-        }
-        out
+        self.per_member(None, |l| self.leaf_nearest(l).map(|r| (r.1 != u32::MAX).then_some((r.1 as usize, r.0))))
     }
 
     /// The squared distance from every point of the set to its `k`-th
@@ -469,20 +508,68 @@ impl AcceptTree {
     /// answers for its points at once, as [`AcceptTree::members_nearest`]
     /// does, each point keeping its k smallest distances.
     pub(crate) fn members_kth(&self, k: usize) -> Vec<f32> {
-        let mut out = vec![f32::INFINITY; self.len];
         if k == 0 {
-            return out;
+            return vec![f32::INFINITY; self.len];
         }
+        self.per_member(f32::INFINITY, |l| self.leaf_kth(l, k))
+    }
+
+    /// The answers of `leaf` (one per point of a leaf, in the leaf's order;
+    /// the leaves in parallel) by index in the set, `none` where no leaf
+    /// answers.
+    fn per_member<T: Copy + Send>(&self, none: T, leaf: impl Fn(usize) -> [T; LEAF] + Sync) -> Vec<T> {
         let leaves: Vec<usize> = (0..self.nodes.len()).filter(|&i| self.nodes[i].count > 0).collect();
-        let found: Vec<[f32; LEAF]> = leaves.par_iter().map(|&l| self.leaf_kth(l, k)).collect();
-        for (&l, kth) in leaves.iter().zip(found) {
+        let found: Vec<[T; LEAF]> = leaves.par_iter().map(|&l| leaf(l)).collect();
+        let mut out = vec![none; self.len];
+        for (&l, answers) in leaves.iter().zip(found) {
             let node = self.nodes[l];
             let s = node.first as usize;
-            for (&i, d) in self.leaves.index[s..s + node.count as usize].iter().zip(kth) {
-                out[i as usize] = d;
+            for (&i, a) in self.leaves.index[s..s + node.count as usize].iter().zip(answers) {
+                out[i as usize] = a;
             }
         }
         out
+    }
+
+    /// One walk for all the points of leaf `l` (its lanes `q`): the leaf's
+    /// own points first, so that the walk starts with bounds, then the
+    /// nodes, nearer first. A node is skipped when its box lies beyond
+    /// every lane's bound (`bounds` of `state`; with `ties`, a node at
+    /// exactly a lane's bound is still walked). `visit` takes each leaf
+    /// node walked. The padding lanes must hold a negative bound, which no
+    /// box is within.
+    fn walk_for_leaf<S>(
+        &self,
+        (l, q): (usize, &Lanes),
+        state: &mut S,
+        bounds: impl Fn(&S) -> &[f32; LEAF],
+        ties: bool,
+        mut visit: impl FnMut(&mut S, &Node),
+    ) {
+        let leaf = self.nodes[l];
+        visit(state, &leaf);
+        let within = |d: f32, bound: f32| if ties { d <= bound } else { d < bound };
+        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
+        while let Some((at, b)) = walk.pop() {
+            let lane_bounds = bounds(state);
+            if !within(b, lane_bounds[..q.count].iter().fold(0.0f32, |m, &d| m.max(d))) {
+                continue;
+            }
+            let node = self.nodes[at as usize];
+            let d = q.box_dist_sq(&node);
+            let mut any = false;
+            for t in 0..LEAF {
+                any |= within(d[t], lane_bounds[t]);
+            }
+            if !any {
+                continue;
+            }
+            if node.count == 0 {
+                self.push_children(&mut walk, &leaf, &node);
+            } else if at as usize != l {
+                visit(state, &node);
+            }
+        }
     }
 
     /// The k-th smallest distance from each point of leaf `l` to the other
@@ -493,152 +580,87 @@ impl AcceptTree {
     /// it can hold no smaller distance. The multiset of the k smallest, so
     /// its k-th, does not depend on the order the points are met in.
     fn leaf_kth(&self, l: usize, k: usize) -> [f32; LEAF] {
-        let leaf = self.nodes[l];
-        let (s, count) = (leaf.first as usize, leaf.count as usize);
-        let lanes = |v: &[f32]| -> [f32; LEAF] { v[s..s + LEAF].try_into().unwrap_or([f32::INFINITY; LEAF]) };
-        let (qx, qy, qz) = (lanes(&self.leaves.x), lanes(&self.leaves.y), lanes(&self.leaves.z));
-        let own: [u32; LEAF] = self.leaves.index[s..s + LEAF].try_into().unwrap_or([u32::MAX; LEAF]);
+        let q = Lanes::of(self, &self.nodes[l]);
         // Lane t's k smallest, ascending, at t·k; its k-th apart. The
         // padding lanes hold a negative k-th, which nothing beats.
         let mut lists = vec![f32::INFINITY; LEAF * k];
         let mut kth = [f32::INFINITY; LEAF];
-        kth[count..].fill(-1.0);
-        let mut visit = |kth: &mut [f32; LEAF], node: &Node| {
-            let ns = node.first as usize;
-            for p in ns..ns + node.count as usize {
-                let (px, py, pz, j) = (self.leaves.x[p], self.leaves.y[p], self.leaves.z[p], self.leaves.index[p]);
-                let mut d = [0.0f32; LEAF];
-                let mut nearer = [false; LEAF];
-                for t in 0..LEAF {
-                    // The order of `Leaves::dist_sq`: (x² + y²) + z².
-                    let (x, y, z) = (px - qx[t], py - qy[t], pz - qz[t]);
-                    d[t] = x * x + y * y + z * z;
-                    nearer[t] = (d[t] < kth[t]) & (own[t] != j);
-                }
-                if !nearer.contains(&true) {
-                    continue;
-                }
-                for t in 0..count {
-                    if nearer[t] {
-                        let list = &mut lists[t * k..(t + 1) * k];
-                        let at = list.partition_point(|&e| e <= d[t]);
-                        list.copy_within(at..k - 1, at + 1);
-                        list[at] = d[t];
-                        kth[t] = list[k - 1];
+        kth[q.count..].fill(-1.0);
+        self.walk_for_leaf(
+            (l, &q),
+            &mut kth,
+            |kth| kth,
+            false,
+            |kth, node| {
+                let ns = node.first as usize;
+                for p in ns..ns + node.count as usize {
+                    let j = self.leaves.index[p];
+                    let d = q.dist_sq(p, &self.leaves);
+                    let mut nearer = [false; LEAF];
+                    for t in 0..LEAF {
+                        nearer[t] = (d[t] < kth[t]) & (q.own[t] != j);
+                    }
+                    if !nearer.contains(&true) {
+                        continue;
+                    }
+                    for t in 0..q.count {
+                        if nearer[t] {
+                            let list = &mut lists[t * k..(t + 1) * k];
+                            let at = list.partition_point(|&e| e <= d[t]);
+                            list.copy_within(at..k - 1, at + 1);
+                            list[at] = d[t];
+                            kth[t] = list[k - 1];
+                        }
                     }
                 }
-            }
-        };
-        let reaches = |kth: &[f32; LEAF], node: &Node| -> bool {
-            let mut d = [0.0f32; LEAF];
-            for (a, q) in [&qx, &qy, &qz].into_iter().enumerate() {
-                for t in 0..LEAF {
-                    let e = (node.lo[a] - q[t]).max(q[t] - node.hi[a]).max(0.0);
-                    d[t] += e * e;
-                }
-            }
-            let mut any = false;
-            for t in 0..LEAF {
-                any |= d[t] < kth[t];
-            }
-            any
-        };
-        visit(&mut kth, &leaf);
-        let bound = |kth: &[f32; LEAF]| kth[..count].iter().fold(0.0f32, |m, &d| m.max(d));
-        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
-        while let Some((at, b)) = walk.pop() {
-            if b >= bound(&kth) {
-                continue;
-            }
-            let node = self.nodes[at as usize];
-            if !reaches(&kth, &node) {
-                continue;
-            }
-            if node.count == 0 {
-                self.push_children(&mut walk, &leaf, &node);
-            } else if at as usize != l {
-                visit(&mut kth, &node);
-            }
-        }
+            },
+        );
         kth
     }
 
     /// The nearest other point of each point of leaf `l`, in the leaf's
-    /// order (ties to the lower index): the leaf's own points first, so that
-    /// the walk starts with a bound, then one walk, nearer node first, that
-    /// skips a node whose box lies farther from every point of the leaf than
-    /// its best so far. A node at exactly that distance is still walked: it
-    /// may hold a tie of lower index.
+    /// order (ties to the lower index), by one walk for all of them
+    /// ([`AcceptTree::walk_for_leaf`]) that skips a node whose box lies
+    /// farther from every point of the leaf than its best so far. A node at
+    /// exactly that distance is still walked: it may hold a tie of lower
+    /// index.
     ///
     /// The leaf's points are lanes: each point of a visited node is compared
     /// with all of them at once (distances, then the better of the two by
-    /// distance and index, as selects), and the box test is one step over
-    /// the lanes too. The best of each lane is the least (distance, index)
-    /// over the points it was compared with, whatever their order.
+    /// distance and index, as selects). The best of each lane is the least
+    /// (distance, index) over the points it was compared with, whatever
+    /// their order.
     fn leaf_nearest(&self, l: usize) -> [Ranked; LEAF] {
-        let leaf = self.nodes[l];
-        let (s, count) = (leaf.first as usize, leaf.count as usize);
-        let lanes = |v: &[f32]| -> [f32; LEAF] { v[s..s + LEAF].try_into().unwrap_or([f32::INFINITY; LEAF]) };
-        let (qx, qy, qz) = (lanes(&self.leaves.x), lanes(&self.leaves.y), lanes(&self.leaves.z));
-        let own: [u32; LEAF] = self.leaves.index[s..s + LEAF].try_into().unwrap_or([u32::MAX; LEAF]);
+        let q = Lanes::of(self, &self.nodes[l]);
         // The padding lanes hold a negative best, which no distance beats
         // and no box is within.
-        let mut bd = [f32::INFINITY; LEAF];
-        let mut bi = [u32::MAX; LEAF];
-        bd[count..].fill(-1.0);
-        let visit = |bd: &mut [f32; LEAF], bi: &mut [u32; LEAF], node: &Node| {
-            let ns = node.first as usize;
-            for k in ns..ns + node.count as usize {
-                let (px, py, pz, j) = (self.leaves.x[k], self.leaves.y[k], self.leaves.z[k], self.leaves.index[k]);
-                for t in 0..LEAF {
-                    // The order of `Leaves::dist_sq`: (x² + y²) + z².
-                    let (x, y, z) = (px - qx[t], py - qy[t], pz - qz[t]);
-                    let d = x * x + y * y + z * z;
-                    let better = ((d < bd[t]) | ((d == bd[t]) & (j < bi[t]))) & (own[t] != j);
-                    // Selects as masks, which SSE2 has (it has no blend).
-                    let m = 0u32.wrapping_sub(better as u32);
-                    bd[t] = f32::from_bits((d.to_bits() & m) | (bd[t].to_bits() & !m));
-                    bi[t] = (j & m) | (bi[t] & !m);
+        let mut best = ([f32::INFINITY; LEAF], [u32::MAX; LEAF]);
+        best.0[q.count..].fill(-1.0);
+        self.walk_for_leaf(
+            (l, &q),
+            &mut best,
+            |best| &best.0,
+            true,
+            |(bd, bi), node| {
+                let ns = node.first as usize;
+                for k in ns..ns + node.count as usize {
+                    let j = self.leaves.index[k];
+                    let d = q.dist_sq(k, &self.leaves);
+                    for t in 0..LEAF {
+                        let better = ((d[t] < bd[t]) | ((d[t] == bd[t]) & (j < bi[t]))) & (q.own[t] != j);
+                        // Selects as masks, which SSE2 has (it has no blend).
+                        let m = 0u32.wrapping_sub(better as u32);
+                        bd[t] = f32::from_bits((d[t].to_bits() & m) | (bd[t].to_bits() & !m));
+                        bi[t] = (j & m) | (bi[t] & !m);
+                    }
                 }
-            }
-        };
-        // Whether any lane's best may be matched within `node`'s box.
-        let asks = |bd: &[f32; LEAF], node: &Node| -> bool {
-            let mut d = [0.0f32; LEAF];
-            for (a, q) in [&qx, &qy, &qz].into_iter().enumerate() {
-                for t in 0..LEAF {
-                    let e = (node.lo[a] - q[t]).max(q[t] - node.hi[a]).max(0.0);
-                    d[t] += e * e;
-                }
-            }
-            let mut any = false;
-            for t in 0..LEAF {
-                any |= d[t] <= bd[t];
-            }
-            any
-        };
-        visit(&mut bd, &mut bi, &leaf);
-        let bound = |bd: &[f32; LEAF]| bd[..count].iter().fold(0.0f32, |m, &d| m.max(d));
-        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
-        while let Some((at, b)) = walk.pop() {
-            if b > bound(&bd) {
-                continue;
-            }
-            let node = self.nodes[at as usize];
-            if !asks(&bd, &node) {
-                continue;
-            }
-            if node.count == 0 {
-                self.push_children(&mut walk, &leaf, &node);
-            } else if at as usize != l {
-                visit(&mut bd, &mut bi, &node);
-            }
+            },
+        );
+        let mut ranked = [Ranked(f32::INFINITY, u32::MAX); LEAF];
+        for (r, (&d, &i)) in ranked.iter_mut().zip(best.0.iter().zip(&best.1)).take(q.count) {
+            *r = Ranked(d, i);
         }
-        let mut best = [Ranked(f32::INFINITY, u32::MAX); LEAF];
-        for t in 0..count {
-            best[t] = Ranked(bd[t], bi[t]);
-        }
-        best
+        ranked
     }
 
     /// Every point within squared distance `r2` of `q` (`r2` not NaN), as

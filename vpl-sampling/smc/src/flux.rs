@@ -1031,7 +1031,7 @@ impl AreaProbes {
         // The sites' normals side by side: the walks ask for them at every
         // nearer site.
         let site_n: Vec<Vec3> = sites.iter().map(|s| s.n).collect();
-        let same_surface = |q: &Probe, i: usize| site_n[i].dot(q.n) > SAME_SURFACE_COS;
+        let same_surface = |n: Vec3, i: usize| site_n[i].dot(n) > SAME_SURFACE_COS;
         let around_edge = |q: &Probe, i: usize| {
             let c = site_n[i].dot(q.n);
             c > SAME_SIDE_COS && c <= SAME_SURFACE_COS
@@ -1046,7 +1046,7 @@ impl AreaProbes {
         let points: Vec<Vec3> = probes.iter().map(|q| q.p).collect();
         let probe_n: Vec<Vec3> = probes.iter().map(|q| q.n).collect();
         let first: Vec<(usize, usize)> = tree
-            .nearest_accepted_each(&points, |t, i| site_n[i].dot(probe_n[t]) > SAME_SURFACE_COS)
+            .nearest_accepted_each(&points, |t, i| same_surface(probe_n[t], i))
             .into_iter()
             .enumerate()
             .filter_map(|(t, found)| found.map(|(i, _)| (t, i)))
@@ -1065,7 +1065,7 @@ impl AreaProbes {
             .par_iter()
             .map(|&t| {
                 let q = &batches[todo[t].0][todo[t].1];
-                let on_surface = tree.nearest_accepted_n(q.p, None, |i| same_surface(q, i), OWNER_TRIES).into_iter().skip(1);
+                let on_surface = tree.nearest_accepted_n(q.p, None, |i| same_surface(q.n, i), OWNER_TRIES).into_iter().skip(1);
                 let round_edge = tree.nearest_accepted_n(q.p, None, |i| around_edge(q, i), OWNER_TRIES);
                 (t, on_surface.chain(round_edge).map(|(i, _)| i).collect())
             })

@@ -117,37 +117,57 @@ const PARALLEL_BUILD: usize = 4096;
 /// order, with their indices in the set) into `node` and its descendants into `below`, whose first
 /// element has index `base` in the tree: the children as the pair
 /// `base, base + 1`, then the left child's descendants, then the right's.
-fn build(order: &mut [([f32; 3], u32)], start: usize, node: &mut Node, below: &mut [Node], base: usize) {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for (p, _) in order.iter() {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
+///
+/// `bound` is a box around the points (the root's tight box, a child's
+/// its parent's cut at the split): it chooses the axis to split, its
+/// longest. Each node's own box is made tight from below, a leaf's over its
+/// points and an inner node's as the union of its children's, so no pass
+/// over a node's points is spent on its box.
+fn build(order: &mut [([f32; 3], u32)], start: usize, node: &mut Node, below: &mut [Node], base: usize, bound: ([f32; 3], [f32; 3])) {
     let n = order.len();
     if n <= LEAF {
+        let (lo, hi) = bounds(order);
         *node = Node { lo, hi, first: start as u32, count: n as u32 };
         return;
     }
-    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
+    let (blo, bhi) = bound;
+    let axis = (0..3).max_by(|&a, &b| (bhi[a] - blo[a]).total_cmp(&(bhi[b] - blo[b]))).unwrap_or(0);
     let mid = n / 2;
     order.select_nth_unstable_by(mid, |(p, i), (q, j)| p[axis].total_cmp(&q[axis]).then(i.cmp(j)));
-    *node = Node { lo, hi, first: base as u32, count: 0 };
+    let cut = order[mid].0[axis];
+    let (mut left_bound, mut right_bound) = (bound, bound);
+    left_bound.1[axis] = cut;
+    right_bound.0[axis] = cut;
     let (pair, rest) = below.split_at_mut(2);
     let (left_below, right_below) = rest.split_at_mut(node_count(mid) - 1);
     let (left, right) = pair.split_at_mut(1);
     let (order_left, order_right) = order.split_at_mut(mid);
     let (left_base, right_base) = (base + 2, base + 2 + left_below.len());
-    let mut build_left = || build(order_left, start, &mut left[0], left_below, left_base);
-    let mut build_right = || build(order_right, start + mid, &mut right[0], right_below, right_base);
+    let mut build_left = || build(order_left, start, &mut left[0], left_below, left_base, left_bound);
+    let mut build_right = || build(order_right, start + mid, &mut right[0], right_below, right_base, right_bound);
     if n >= PARALLEL_BUILD {
         rayon::join(build_left, build_right);
     } else {
         build_left();
         build_right();
     }
+    let (l, r) = (&pair[0], &pair[1]);
+    let lo = [0, 1, 2].map(|a| l.lo[a].min(r.lo[a]));
+    let hi = [0, 1, 2].map(|a| l.hi[a].max(r.hi[a]));
+    *node = Node { lo, hi, first: base as u32, count: 0 };
+}
+
+/// The tight box of `points`.
+fn bounds(points: &[([f32; 3], u32)]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for (p, _) in points {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    (lo, hi)
 }
 
 /// Squared distance between the boxes of two nodes (0 where they overlap):
@@ -294,7 +314,8 @@ impl AcceptTree {
         let mut nodes = vec![empty; node_count(points.len())];
         if !points.is_empty() {
             let (root, below) = nodes.split_at_mut(1);
-            build(&mut items, 0, &mut root[0], below, 1);
+            let bound = bounds(&items);
+            build(&mut items, 0, &mut root[0], below, 1, bound);
         }
         // Each leaf's points into a block of its own, in the order of the
         // nodes (which depends on the sizes alone).

@@ -1346,22 +1346,27 @@ impl AreaProbes {
             .collect();
         let (per_batch, nears): (Vec<_>, Vec<_>) = per_batch.into_iter().unzip();
         let near = near.then(|| near_ratios_of(sites.len(), &nears.into_iter().flatten().collect::<Vec<_>>(), &weights));
-        let mut cells = vec![(Cell::default(), DVec3::ZERO, 0.0); sites.len()];
-        for batch in per_batch {
-            for ((c, m, own), (b, bm, bown)) in cells.iter_mut().zip(batch) {
-                c.area += b.area;
-                *m += bm;
-                *own += bown;
-                c.radiance_sum += b.radiance_sum;
-                c.candidates += b.candidates;
-                c.weighted_radiance += b.weighted_radiance;
-                c.radiance_weight += b.radiance_weight;
-                c.history_luminance += b.history_luminance;
-                c.history_weight += b.history_weight;
-                c.track_then += b.track_then;
-                c.track_now += b.track_now;
-            }
-        }
+        // Each cell's sums over the batches, in batch order (the cells in parallel).
+        let cells: Vec<CellSums> = (0..sites.len())
+            .into_par_iter()
+            .map(|i| {
+                let (mut c, mut m, mut own) = (Cell::default(), DVec3::ZERO, 0.0);
+                for (b, bm, bown) in per_batch.iter().map(|batch| &batch[i]) {
+                    c.area += b.area;
+                    m += *bm;
+                    own += *bown;
+                    c.radiance_sum += b.radiance_sum;
+                    c.candidates += b.candidates;
+                    c.weighted_radiance += b.weighted_radiance;
+                    c.radiance_weight += b.radiance_weight;
+                    c.history_luminance += b.history_luminance;
+                    c.history_weight += b.history_weight;
+                    c.track_then += b.track_then;
+                    c.track_now += b.track_now;
+                }
+                (c, m, own)
+            })
+            .collect();
         let cells = cells
             .into_iter()
             .zip(sites)
@@ -1529,35 +1534,43 @@ impl NearBatch {
     }
 }
 
+/// A thread's lists for [`near_ratios_of`]: a cell's near probes
+/// (squared distance, weight, weighted area) and their order by distance.
+type NearScratch = (Vec<(f32, f64, f64)>, Vec<(f32, u32)>);
+
 /// The near ratio of each of `cells` cells from its area probes, grouped
 /// per batch in batch order, each batch weighted by `weights`
 /// ([`AreaProbes::near_ratios`]).
 fn near_ratios_of(cells: usize, per_batch: &[NearBatch], weights: &[f64]) -> Vec<f64> {
     (0..cells)
         .into_par_iter()
-        .map(|i| {
-            // (squared distance, weight, weighted area) in batch order.
-            let cell: Vec<(f32, f64, f64)> =
-                per_batch.iter().zip(weights).flat_map(|(b, &w)| b.cell(i).iter().map(move |&(d, a)| (d, w, w * a as f64))).collect();
-            let (w, a) = cell.iter().fold((0.0, 0.0), |(w, a), e| (w + e.1, a + e.2));
-            if cell.is_empty() || w <= 0.0 || a <= 0.0 {
-                return 1.0;
-            }
-            let m = ((cell.len() as f64 * NEAR_SHARE).ceil() as usize).max(NEAR_MIN).min(cell.len());
-            // The m nearest, the earlier probe first among equal distances
-            // (the order the grouping kept), summed nearest first: chosen
-            // in linear time, and only they are sorted.
-            let mut order: Vec<(f32, u32)> = cell.iter().enumerate().map(|(j, e)| (e.0, j as u32)).collect();
-            let by_distance = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
-            if m < order.len() {
-                order.select_nth_unstable_by(m, by_distance);
-            }
-            let near = &mut order[..m];
-            near.sort_unstable_by(by_distance);
-            let (near_w, near_a) = near.iter().fold((0.0, 0.0), |(w, a), &(_, j)| (w + cell[j as usize].1, a + cell[j as usize].2));
-            let ratio = (near_a / near_w) / (a / w);
-            if ratio.is_finite() && ratio > 0.0 { ratio } else { 1.0 }
-        })
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(cell, order): &mut NearScratch, i| {
+                // (squared distance, weight, weighted area) in batch order.
+                cell.clear();
+                cell.extend(per_batch.iter().zip(weights).flat_map(|(b, &w)| b.cell(i).iter().map(move |&(d, a)| (d, w, w * a as f64))));
+                let (w, a) = cell.iter().fold((0.0, 0.0), |(w, a), e| (w + e.1, a + e.2));
+                if cell.is_empty() || w <= 0.0 || a <= 0.0 {
+                    return 1.0;
+                }
+                let m = ((cell.len() as f64 * NEAR_SHARE).ceil() as usize).max(NEAR_MIN).min(cell.len());
+                // The m nearest, the earlier probe first among equal distances
+                // (the order the grouping kept), summed nearest first: chosen
+                // in linear time, and only they are sorted.
+                order.clear();
+                order.extend(cell.iter().enumerate().map(|(j, e)| (e.0, j as u32)));
+                let by_distance = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+                if m < order.len() {
+                    order.select_nth_unstable_by(m, by_distance);
+                }
+                let near = &mut order[..m];
+                near.sort_unstable_by(by_distance);
+                let (near_w, near_a) = near.iter().fold((0.0, 0.0), |(w, a), &(_, j)| (w + cell[j as usize].1, a + cell[j as usize].2));
+                let ratio = (near_a / near_w) / (a / w);
+                if ratio.is_finite() && ratio > 0.0 { ratio } else { 1.0 }
+            },
+        )
         .collect()
 }
 

@@ -438,13 +438,26 @@ impl AcceptTree {
         accept: &(impl Fn(usize, usize) -> bool + Sync),
         k: usize,
     ) -> Vec<Option<(usize, f32)>> {
-        let mut out = vec![None; queries.len()];
         if k == 0 || self.len == 0 || queries.is_empty() {
+            return vec![None; queries.len()];
+        }
+        self.nearest_accepted_each_of(&AcceptTree::new(queries), accept, k)
+    }
+
+    /// [`AcceptTree::nearest_accepted_each`] for the points of `queries`, a
+    /// tree over them, in their order.
+    pub(crate) fn nearest_accepted_each_of(
+        &self,
+        queries: &AcceptTree,
+        accept: &(impl Fn(usize, usize) -> bool + Sync),
+        k: usize,
+    ) -> Vec<Option<(usize, f32)>> {
+        let mut out = vec![None; queries.len];
+        if k == 0 || self.len == 0 || queries.len == 0 {
             return out;
         }
-        let tree = AcceptTree::new(queries);
-        let leaves: Vec<usize> = (0..tree.nodes.len()).filter(|&i| tree.nodes[i].count > 0).collect();
-        let found: Vec<Vec<Answer>> = leaves.par_iter().map(|&l| self.leaf_accepted(&tree, l, accept, k)).collect();
+        let leaves: Vec<usize> = (0..queries.nodes.len()).filter(|&i| queries.nodes[i].count > 0).collect();
+        let found: Vec<Vec<Answer>> = leaves.par_iter().map(|&l| self.leaf_accepted(queries, l, accept, k)).collect();
         for (i, answer) in found.into_iter().flatten() {
             out[i as usize] = answer;
         }

@@ -211,6 +211,20 @@ impl KnnDensity {
         self.accepted().nearest_accepted_each(&qs, &accept, ACCEPT_AMONG.min(self.points.len()))
     }
 
+    /// [`KnnDensity::nearest_accepted_each`] for every point of `queries`,
+    /// in their order: a set whose tree is built (or kept) already walks
+    /// as the queries' tree, and none is built for them.
+    pub fn nearest_accepted_each_of(
+        &self,
+        queries: &KnnDensity,
+        accept: impl Fn(usize, usize) -> bool + Sync,
+    ) -> Vec<Option<(usize, f32)>> {
+        if self.points.is_empty() {
+            return vec![None; queries.len()];
+        }
+        self.accepted().nearest_accepted_each_of(queries.accepted(), &accept, ACCEPT_AMONG.min(self.points.len()))
+    }
+
     /// Every point of the set within squared distance `r2` of `q`, as
     /// (index, squared distance), in no particular order.
     pub fn within(&self, q: Vec3, r2: f32) -> Vec<(usize, f32)> {
@@ -338,6 +352,24 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The queries given as a set of their own (its tree built, as a
+    /// caller that keeps one has it) get the answers the list of their
+    /// points gets, in the same order; an empty set of queries, none.
+    #[test]
+    fn queries_as_a_set_answer_as_their_points() {
+        let mut rng = vpl_core::rng::stream(4, 0, vpl_core::rng::Purpose::TEST, 0);
+        let mut cloud =
+            |n: usize| -> Vec<Vec3> { (0..n).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 5.0).collect() };
+        let sites = KnnDensity::new(&cloud(600)).unwrap();
+        let queries = cloud(1500);
+        let set = KnnDensity::new(&queries).unwrap();
+        set.member_nearest();
+        let accept = |q: usize, i: usize| (q + i) % 3 != 0;
+        assert_eq!(sites.nearest_accepted_each_of(&set, accept), sites.nearest_accepted_each(&queries, accept));
+        assert!(sites.nearest_accepted_each_of(&KnnDensity::new(&[]).unwrap(), accept).is_empty());
+        assert_eq!(KnnDensity::new(&[]).unwrap().nearest_accepted_each_of(&set, accept), vec![None; 1500]);
     }
 
     #[test]

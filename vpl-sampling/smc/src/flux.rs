@@ -782,18 +782,15 @@ impl AreaProbes {
         if n < 2 || normals.len() != n || shading.len() != n || nearest.len() != n || tree.len() != n {
             return;
         }
-        let mut radiance = vec![None; n];
-        let mut drawn = vec![0.0f32; n];
-        let mut ids = vec![None; n];
-        let mut tracks = vec![None; n];
-        for c in candidates {
+        // Each hit's candidate, if it became one (the last, were a hit given twice).
+        let mut candidate_of = vec![u32::MAX; n];
+        for (i, c) in candidates.iter().enumerate() {
             if c.hit < n {
-                radiance[c.hit] = c.radiance.is_finite().then_some(c.radiance);
-                drawn[c.hit] = if c.draws.is_finite() && c.draws > 0.0 { c.draws } else { 0.0 };
-                ids[c.hit] = Some(c.id);
-                tracks[c.hit] = c.track;
+                candidate_of[c.hit] = i as u32;
             }
         }
+        let candidate = |h: usize| candidates.get(candidate_of[h] as usize);
+        let radiance = |h: usize| candidate(h).map(|c| c.radiance).filter(|l| l.is_finite());
         let stride = n.div_ceil(self.per_iteration).max(1);
         let offset = self.pushed % stride;
         self.pushed = self.pushed.wrapping_add(1);
@@ -802,7 +799,7 @@ impl AreaProbes {
         let mut kept: Vec<usize> = (offset..n).step_by(stride).collect();
         let area_probes = kept.len();
         if stride > 1 {
-            kept.extend((0..n).filter(|&h| h % stride != offset && radiance[h].is_some()));
+            kept.extend((0..n).filter(|&h| h % stride != offset && radiance(h).is_some()));
         }
         let accept = if self.ball == ProbeArea::Smooth { SAME_SURFACE_COS } else { SAME_SIDE_COS };
         let mut r1_sq = neighbour_sq_within(&tree, hits, normals, nearest, &kept, accept);
@@ -831,12 +828,13 @@ impl AreaProbes {
                 let area = if t < area_probes { scale * r1_sq[t] } else { 0.0 };
                 let placed = hits[h].is_finite() && normals[h].is_finite();
                 let stands = placed && area.is_finite() && area > 0.0;
-                let radiance = radiance[h].filter(|_| placed);
+                let radiance = radiance(h).filter(|_| placed);
                 // The hit's own area over its share of the draws.
-                let weight = drawn[h] * own_area * r1_sq[t];
+                let drawn = candidate(h).map_or(0.0, |c| if c.draws.is_finite() && c.draws > 0.0 { c.draws } else { 0.0 });
+                let weight = drawn * own_area * r1_sq[t];
                 let at = match radiance {
                     Some(radiance) => {
-                        if let (Some(y), Some(id)) = (tracks[h], ids[h]) {
+                        if let Some(&ProbeCandidate { track: Some(y), id, .. }) = candidate(h) {
                             tracked.push(Tracked { carried: carried.len() as u32, id, y, pending: true });
                         }
                         carried.push(Carried { radiance, weight: if weight.is_finite() { weight } else { 0.0 }, track: None });
@@ -1042,15 +1040,27 @@ impl AreaProbes {
         // the next ones on its surface and those around an edge, in that
         // order: in rounds, or in one batch when `rays` speculates (only the
         // few that fail the first try, so that speculating costs few rays).
-        let probes: Vec<&Probe> = todo.iter().map(|&(b, k)| &self.batches[b][k]).collect();
-        let points: Vec<Vec3> = probes.iter().map(|q| q.p).collect();
-        let probe_n: Vec<Vec3> = probes.iter().map(|q| q.n).collect();
-        let first: Vec<(usize, usize)> = tree
-            .nearest_accepted_each(&points, |t, i| same_surface(probe_n[t], i))
-            .into_iter()
-            .enumerate()
-            .filter_map(|(t, found)| found.map(|(i, _)| (t, i)))
-            .collect();
+        // The newest iteration's probes, most of those of a frame, walk as the
+        // tree that iteration has already; the others as a tree of their own.
+        let newest = self.batches.len().saturating_sub(1);
+        let mut nearest: Vec<Option<(usize, f32)>> = vec![None; todo.len()];
+        let (of_newest, mut rest): (Vec<usize>, Vec<usize>) = (0..todo.len()).partition(|&t| todo[t].0 == newest);
+        let batch = &self.batches[newest];
+        if of_newest.len() * 2 >= batch.len() && self.trees[newest].len() == batch.len() {
+            let normals: Vec<Vec3> = batch.iter().map(|q| q.n).collect();
+            let each = tree.nearest_accepted_each_of(&self.trees[newest], |k, i| same_surface(normals[k], i));
+            for &t in &of_newest {
+                nearest[t] = each[todo[t].1];
+            }
+        } else {
+            rest = (0..todo.len()).collect();
+        }
+        let (points, normals): (Vec<Vec3>, Vec<Vec3>) =
+            rest.iter().map(|&t| (self.batches[todo[t].0][todo[t].1].p, self.batches[todo[t].0][todo[t].1].n)).unzip();
+        for (&t, found) in rest.iter().zip(tree.nearest_accepted_each(&points, |r, i| same_surface(normals[r], i))) {
+            nearest[t] = found;
+        }
+        let first: Vec<(usize, usize)> = nearest.iter().enumerate().filter_map(|(t, found)| found.map(|(i, _)| (t, i))).collect();
         // One try each: one batch of rays, and no list per probe.
         let (seen, rays_cast) = self.see(scene, rays, sites, first.iter().map(|&(t, i)| (todo[t], i)));
         cast += rays_cast;

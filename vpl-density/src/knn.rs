@@ -245,6 +245,17 @@ impl KnnDensity {
         self.accepted().members_nearest()
     }
 
+    /// The set with the tree of its neighbour and predicate queries built
+    /// now (in parallel), which the first such query builds otherwise:
+    /// where threads share the set, that query's thread builds it alone
+    /// while the others wait on it.
+    pub fn prepared(self) -> KnnDensity {
+        if !self.points.is_empty() {
+            self.accepted();
+        }
+        self
+    }
+
     /// The k-d tree of the predicate queries, built on first use.
     fn accepted(&self) -> &AcceptTree {
         self.accepted.get_or_init(|| AcceptTree::new(&self.points))
@@ -370,6 +381,10 @@ mod tests {
         assert_eq!(sites.nearest_accepted_each_of(&set, accept), sites.nearest_accepted_each(&queries, accept));
         assert!(sites.nearest_accepted_each_of(&KnnDensity::new(&[]).unwrap(), accept).is_empty());
         assert_eq!(KnnDensity::new(&[]).unwrap().nearest_accepted_each_of(&set, accept), vec![None; 1500]);
+        // A set prepared ahead answers as one that builds its tree on first use.
+        let prepared = KnnDensity::new(&queries).unwrap().prepared();
+        assert_eq!(prepared.member_nearest(), KnnDensity::new(&queries).unwrap().member_nearest());
+        assert!(KnnDensity::new(&[]).unwrap().prepared().is_empty());
     }
 
     #[test]

@@ -859,7 +859,10 @@ impl AreaProbes {
             // The kept points are finite hits, or the tree of all hits
             // would not have been made.
             match KnnDensity::new(&points) {
-                Ok(t) => t,
+                // Built now, on every thread: the first search of it
+                // (a newcomer's, next frame) would build it on one while
+                // the other waits.
+                Ok(t) => t.prepared(),
                 Err(_) => return,
             }
         };

@@ -891,12 +891,15 @@ impl AreaProbes {
         if self.batches.is_empty() {
             return 0.0;
         }
-        self.carried
-            .iter()
+        // Per iteration in parallel, then summed in order.
+        let per_batch: Vec<f64> = self
+            .carried
+            .par_iter()
             .zip(&self.draw_scales)
             .zip(self.weights())
             .map(|((c, &k), w)| w * k * c.iter().map(|c| c.weight as f64 * vpl_core::image::luminance(c.radiance) as f64).sum::<f64>())
-            .sum()
+            .collect();
+        per_batch.into_iter().sum()
     }
 
     /// Brings the candidates held to new lights ([`crate::Relight::Candidates`]),

@@ -566,15 +566,14 @@ impl SmcSampler {
         st.m_strong = candidates.iter().filter(|k| threshold.is_none_or(|t| k.intensity > t)).count();
         let m_min = c.m_max.min(st.m_strong);
 
-        let by_intensity = |a: &usize, b: &usize, ps: &[Option<Particle>]| {
-            let (ia, ib) = (ps[*a].map_or(0.0, |p| p.intensity()), ps[*b].map_or(0.0, |p| p.intensity()));
-            ia.total_cmp(&ib).then(a.cmp(b))
-        };
+        // Each slot's intensity (0 where empty), weakest first, then by slot.
+        let slot_i: Vec<f32> = self.particles.iter().map(|p| p.as_ref().map_or(0.0, Particle::intensity)).collect();
+        let by_intensity = |a: &usize, b: &usize| slot_i[*a].total_cmp(&slot_i[*b]).then(a.cmp(b));
         let mut invalid: Vec<usize> = (0..c.vpls).filter(|&s| self.particles[s].is_some() && !valid[s]).collect();
-        invalid.sort_by(|a, b| by_intensity(a, b, &self.particles));
+        invalid.sort_by(by_intensity);
         if invalid.len() < m_min {
             let mut weak: Vec<usize> = (0..c.vpls).filter(|&s| valid[s]).collect();
-            weak.sort_by(|a, b| by_intensity(a, b, &self.particles));
+            weak.sort_by(by_intensity);
             let extra = m_min - invalid.len();
             st.weakest = extra.min(weak.len());
             invalid.extend(weak.into_iter().take(extra));

@@ -469,11 +469,11 @@ impl SmcSampler {
 
         // Line 6: weight 1/p_hit(y) ∝ r_1(y)², the squared distance to the nearest other hit.
         let t0 = Instant::now();
-        let hit_points: Vec<Vec3> = hits.iter().map(|h| h.y.p).collect();
+        let hit_points: Vec<Vec3> = hits.par_iter().map(|h| h.y.p).collect();
         let hit_tree = KnnDensity::new(&hit_points).ok();
         let nearest = hit_tree.as_ref().map(|d| d.member_nearest()).unwrap_or_default();
         let weights: Vec<f32> = if hits.len() > 1 && nearest.len() == hits.len() {
-            nearest.iter().map(|n| n.map_or(f32::INFINITY, |(_, d2)| d2)).collect()
+            nearest.par_iter().map(|n| n.map_or(f32::INFINITY, |(_, d2)| d2)).collect()
         } else {
             vec![1.0; hits.len()]
         };
@@ -514,8 +514,8 @@ impl SmcSampler {
                     track: relit.then_some(hits[h].y),
                 })
                 .collect();
-            let normals: Vec<Vec3> = hits.iter().map(|h| h.y.ng).collect();
-            let shading: Vec<Vec3> = hits.iter().map(|h| h.y.n).collect();
+            let normals: Vec<Vec3> = hits.par_iter().map(|h| h.y.ng).collect();
+            let shading: Vec<Vec3> = hits.par_iter().map(|h| h.y.n).collect();
             if let Some(tree) = hit_tree {
                 self.probes.push(ProbeHits {
                     hits: &hit_points,

@@ -79,8 +79,8 @@ pub fn candidate_hits_from(
     let bounce = BounceRays {
         camera: batch,
         key: stream_key(seed, iteration, Purpose::CANDIDATE),
-        origins: cast.iter().map(|&(j, _)| (from[j as usize], j)).collect(),
-        rays: cast.iter().map(|(_, r)| *r).collect(),
+        origins: cast.par_iter().map(|&(j, _)| (from[j as usize], j)).collect(),
+        rays: cast.par_iter().map(|(_, r)| *r).collect(),
     };
     keep_candidates(scene, &cast, rays.intersect_bounce(scene, &bounce))
 }

@@ -59,7 +59,12 @@ pub(crate) struct AcceptTree {
     leaves: Leaves,
     /// The points of the set.
     len: usize,
+    /// Each node's parent ([`NO_PARENT`] for the root).
+    parent: Vec<u32>,
 }
+
+/// [`AcceptTree::parent`] of the root.
+const NO_PARENT: u32 = u32::MAX;
 
 /// Points by coordinate, with their indices in the set.
 #[derive(Clone, Debug, Default)]
@@ -335,7 +340,14 @@ impl AcceptTree {
             }
             node.first = b as u32;
         }
-        AcceptTree { nodes, leaves, len: points.len() }
+        let mut parent = vec![NO_PARENT; nodes.len()];
+        if !points.is_empty() {
+            for (i, n) in nodes.iter().enumerate().filter(|(_, n)| n.count == 0) {
+                parent[n.first as usize] = i as u32;
+                parent[n.first as usize + 1] = i as u32;
+            }
+        }
+        AcceptTree { nodes, leaves, len: points.len(), parent }
     }
 
     /// Up to `m` points that `accept` takes, other than `skip`, nearest
@@ -568,8 +580,11 @@ impl AcceptTree {
     }
 
     /// One walk for all the points of leaf `l` (its lanes `q`): the leaf's
-    /// own points first, so that the walk starts with bounds, then the
-    /// nodes, nearer first. A node is skipped when its box lies beyond
+    /// own points first, so that the walk starts with bounds, then, from
+    /// the leaf's parent up to the root, the subtree of each ancestor on the
+    /// other side (the nearest first, as the boxes of a tree nest), each
+    /// walked nearer child first. The nodes on the leaf's own path hold it,
+    /// so they are never tested. A node is skipped when its box lies beyond
     /// every lane's bound (`bounds` of `state`; with `ties`, a node at
     /// exactly a lane's bound is still walked). `visit` takes each leaf
     /// node walked. The padding lanes must hold a negative bound, which no
@@ -585,26 +600,32 @@ impl AcceptTree {
         let leaf = self.nodes[l];
         visit(state, &leaf);
         let within = |d: f32, bound: f32| if ties { d <= bound } else { d < bound };
-        let mut walk = Walk::new(0, box_box_dist_sq(&leaf, &self.nodes[0]));
-        while let Some((at, b)) = walk.pop() {
-            let lane_bounds = bounds(state);
-            if !within(b, lane_bounds[..q.count].iter().fold(0.0f32, |m, &d| m.max(d))) {
-                continue;
+        let mut child = l as u32;
+        while let Some(&up) = self.parent.get(child as usize).filter(|&&p| p != NO_PARENT) {
+            let first = self.nodes[up as usize].first;
+            let other = if first == child { first + 1 } else { first };
+            let mut walk = Walk::new(other, box_box_dist_sq(&leaf, &self.nodes[other as usize]));
+            while let Some((at, b)) = walk.pop() {
+                let lane_bounds = bounds(state);
+                if !within(b, lane_bounds[..q.count].iter().fold(0.0f32, |m, &d| m.max(d))) {
+                    continue;
+                }
+                let node = self.nodes[at as usize];
+                let d = q.box_dist_sq(&node);
+                let mut any = false;
+                for t in 0..LEAF {
+                    any |= within(d[t], lane_bounds[t]);
+                }
+                if !any {
+                    continue;
+                }
+                if node.count == 0 {
+                    self.push_children(&mut walk, &leaf, &node);
+                } else {
+                    visit(state, &node);
+                }
             }
-            let node = self.nodes[at as usize];
-            let d = q.box_dist_sq(&node);
-            let mut any = false;
-            for t in 0..LEAF {
-                any |= within(d[t], lane_bounds[t]);
-            }
-            if !any {
-                continue;
-            }
-            if node.count == 0 {
-                self.push_children(&mut walk, &leaf, &node);
-            } else if at as usize != l {
-                visit(state, &node);
-            }
+            child = up;
         }
     }
 

@@ -582,9 +582,9 @@ impl AcceptTree {
     /// One walk for all the points of leaf `l` (its lanes `q`): the leaf's
     /// own points first, so that the walk starts with bounds, then, from
     /// the leaf's parent up to the root, the subtree of each ancestor on the
-    /// other side (the nearest first, as the boxes of a tree nest), each
-    /// walked nearer child first. The nodes on the leaf's own path hold it,
-    /// so they are never tested. A node is skipped when its box lies beyond
+    /// other side (the nearest ancestor's first), each walked nearer child
+    /// first. The nodes on the leaf's own path hold it, so they are never
+    /// tested. A node is skipped when its box lies beyond
     /// every lane's bound (`bounds` of `state`; with `ties`, a node at
     /// exactly a lane's bound is still walked). `visit` takes each leaf
     /// node walked. The padding lanes must hold a negative bound, which no

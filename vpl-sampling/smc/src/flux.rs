@@ -1048,21 +1048,27 @@ impl AreaProbes {
         // few that fail the first try, so that speculating costs few rays).
         // The newest iteration's probes, most of those of a frame, walk as the
         // tree that iteration has already; the others as a tree of their own.
+        // (When they are at least half of it: the walk answers for all of it.)
         let newest = self.batches.len().saturating_sub(1);
-        let mut nearest: Vec<Option<(usize, f32)>> = vec![None; todo.len()];
-        let (of_newest, mut rest): (Vec<usize>, Vec<usize>) = (0..todo.len()).partition(|&t| todo[t].0 == newest);
         let batch = &self.batches[newest];
-        if of_newest.len() * 2 >= batch.len() && self.trees[newest].len() == batch.len() {
+        let with_batch_tree =
+            self.trees[newest].len() == batch.len() && 2 * todo.iter().filter(|&&(b, _)| b == newest).count() >= batch.len();
+        let (of_newest, rest): (Vec<usize>, Vec<usize>) = (0..todo.len()).partition(|&t| with_batch_tree && todo[t].0 == newest);
+        let mut nearest: Vec<Option<(usize, f32)>> = vec![None; todo.len()];
+        if with_batch_tree {
             let normals: Vec<Vec3> = batch.iter().map(|q| q.n).collect();
             let each = tree.nearest_accepted_each_of(&self.trees[newest], |k, i| same_surface(normals[k], i));
             for &t in &of_newest {
                 nearest[t] = each[todo[t].1];
             }
-        } else {
-            rest = (0..todo.len()).collect();
         }
-        let (points, normals): (Vec<Vec3>, Vec<Vec3>) =
-            rest.iter().map(|&t| (self.batches[todo[t].0][todo[t].1].p, self.batches[todo[t].0][todo[t].1].n)).unzip();
+        let (points, normals): (Vec<Vec3>, Vec<Vec3>) = rest
+            .iter()
+            .map(|&t| {
+                let q = &self.batches[todo[t].0][todo[t].1];
+                (q.p, q.n)
+            })
+            .unzip();
         for (&t, found) in rest.iter().zip(tree.nearest_accepted_each(&points, |r, i| same_surface(normals[r], i))) {
             nearest[t] = found;
         }
